@@ -1,0 +1,238 @@
+"""Public solver API: fold a :class:`~.mesh.FoldMesh` to equilibrium with Origami Simulator's model.
+
+Methods (all minimise/settle the same energy, ``core.forces``):
+
+* ``"fast"`` — damped Gauss–Newton with a numpy-only block-tridiagonal linear solver (``core.solver_newton``);
+* ``"faithful"`` — Origami Simulator's explicit damped dynamics (``core.solver_faithful``), run until the residual
+  criterion holds or the step/time cap is hit;
+* ``"isometric"`` — the fast solver with bars ``isometric_factor`` (1000×) stiffer, so the sheet barely stretches.
+
+Convergence, shared by every method, is scale-free: the model is normalised to a unit bounding sphere and the
+residual is ``max_i |F_i|`` divided by a hinge force scale (``forces.characteristic_force``); it is reported with
+the iteration count. Positions come back in the mesh's millimetres.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .forces import characteristic_force, evaluate
+from .mesh import FoldMesh
+from .model import BarHingeModel, build_model
+from .solver_faithful import SolverError, faithful_solve, time_step
+from .solver_newton import HessianAssembler, newton_solve
+
+METHODS = ("fast", "faithful", "isometric")
+
+__all__ = ["METHODS", "FoldResult", "SolverError", "SolverSettings", "Solver", "solve"]
+
+
+@dataclass
+class SolverSettings:
+    """Material and solver settings; defaults are Origami Simulator's (reference §3.1).
+
+    ``tolerance`` is the scale-free residual (max nodal force ÷ hinge force scale). ``max_iterations`` caps Newton
+    iterations; ``max_steps`` and ``time_limit`` (seconds, ``None`` = no limit) cap the faithful integrator.
+    """
+
+    axial_stiffness: float = 20.0
+    crease_stiffness: float = 0.7
+    panel_stiffness: float = 0.7
+    face_stiffness: float = 0.2
+    damping: float = 0.45
+    tolerance: float = 1e-6
+    max_iterations: int = 200
+    max_steps: int = 200_000
+    time_limit: float | None = None
+    isometric: bool = False
+    isometric_factor: float = 1000.0
+    dt_rule: str = "all_terms"
+    dt_safety: float = 0.9
+    check_every: int = 100
+
+    def effective_axial(self) -> float:
+        return self.axial_stiffness * (self.isometric_factor if self.isometric else 1.0)
+
+
+@dataclass
+class FoldResult:
+    """Outcome of one solve. ``positions`` ``(n, 3)`` mm; ``fold_angles`` ``(e,)`` simulated degrees per mesh edge
+    (``nan`` on edges with fewer than two triangles); ``energy`` in normalised units; ``residual`` scale-free.
+
+    ``force_evaluations`` counts every evaluation of the model (gradient or energy-only, line search included);
+    ``hessian_assemblies`` and ``linear_solves`` are reported separately (0 for the faithful solver).
+    """
+
+    positions: np.ndarray
+    fold_angles: np.ndarray
+    iterations: int
+    force_evaluations: int
+    converged: bool
+    residual: float
+    energy: float
+    simulation_ms: float
+    message: str
+    method: str
+    hessian_assemblies: int = 0
+    linear_solves: int = 0
+    theta: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    velocities: np.ndarray | None = None
+    dt: float | None = None
+
+    @property
+    def ms(self) -> float:
+        return self.simulation_ms
+
+
+class Solver:
+    """A model plus its reusable solver data (Hessian ordering, time step) for repeated solves of one mesh.
+
+    The animation and the pipeline keep one of these so the per-mesh preprocessing is paid once.
+    """
+
+    def __init__(self, mesh: FoldMesh, settings: SolverSettings | None = None, method: str = "fast"):
+        if method not in METHODS:
+            raise ValueError(f"unknown solver method {method!r}; choose one of {', '.join(METHODS)}")
+        settings = settings or SolverSettings()
+        if method == "isometric":
+            settings = replace(settings, isometric=True)
+        self.mesh = mesh
+        self.method = method
+        self.settings = settings
+        self.model: BarHingeModel = build_model(
+            mesh,
+            axial_stiffness=settings.effective_axial(),
+            crease_stiffness=settings.crease_stiffness,
+            panel_stiffness=settings.panel_stiffness,
+            face_stiffness=settings.face_stiffness,
+            damping=settings.damping,
+        )
+        self.force_scale = characteristic_force(self.model, settings.crease_stiffness, settings.panel_stiffness)
+        self._assembler: HessianAssembler | None = None
+        self._dt: float | None = None
+        self.lm_lambda = 1e-3
+
+    @property
+    def assembler(self) -> HessianAssembler:
+        if self._assembler is None:
+            self._assembler = HessianAssembler(self.model)
+        return self._assembler
+
+    @property
+    def dt(self) -> float:
+        if self._dt is None:
+            s = self.settings
+            self._dt = time_step(self.model, s.dt_rule, s.dt_safety, s.effective_axial())
+        return self._dt
+
+    def edge_angles(self, theta: np.ndarray) -> np.ndarray:
+        """Per-mesh-edge fold angles in degrees from per-hinge θ (``nan`` where there is no hinge)."""
+        out = np.full(self.model.n_edges, np.nan)
+        out[self.model.hinge_edge] = np.rad2deg(theta)
+        return out
+
+    def solve(
+        self,
+        percent: float = 1.0,
+        *,
+        start: np.ndarray | None = None,
+        theta_prev: np.ndarray | None = None,
+        velocities: np.ndarray | None = None,
+        max_steps: int | None = None,
+        stop_on_convergence: bool = True,
+    ) -> FoldResult:
+        """Solve at fold percent ``percent`` (1.0 = 100 %) from ``start`` (mm, default flat).
+
+        ``theta_prev`` (rad per hinge) carries the unwrapping history of a warm start; ``velocities`` (normalised
+        units) carry the faithful integrator's state between animation frames.
+        """
+        s = self.settings
+        model = self.model
+        t0 = time.perf_counter()
+        x0 = model.rest.copy() if start is None else model.from_mm(start)
+        if x0.shape != model.rest.shape or not np.all(np.isfinite(x0)):
+            raise SolverError(f"start positions must be a finite ({model.n_nodes}, 3) array, got shape {x0.shape}")
+        if theta_prev is None:
+            theta_prev = evaluate(model, x0, None, 0.0, forces=False).theta
+        if self.method == "faithful":
+            v0 = np.zeros_like(x0) if velocities is None else np.asarray(velocities, dtype=np.float64)
+            x, v, theta, st = faithful_solve(
+                model,
+                x0,
+                v0,
+                theta_prev,
+                percent,
+                dt=self.dt,
+                force_scale=self.force_scale,
+                tolerance=s.tolerance,
+                max_steps=s.max_steps if max_steps is None else max_steps,
+                check_every=s.check_every,
+                time_limit=s.time_limit,
+                stop_on_convergence=stop_on_convergence,
+            )
+            energy = evaluate(model, x, theta, percent, forces=False).energy
+            ms = (time.perf_counter() - t0) * 1000.0
+            return FoldResult(
+                positions=model.to_mm(x),
+                fold_angles=self.edge_angles(theta),
+                iterations=st.steps,
+                force_evaluations=st.force_evaluations + 1,
+                converged=st.converged,
+                residual=st.residual,
+                energy=energy,
+                simulation_ms=ms,
+                message=st.message,
+                method=self.method,
+                theta=theta,
+                velocities=v,
+                dt=self.dt,
+            )
+        x, theta, ev, st, lam = newton_solve(
+            model,
+            x0,
+            theta_prev,
+            percent,
+            force_scale=self.force_scale,
+            tolerance=s.tolerance,
+            max_iterations=s.max_iterations,
+            assembler=self.assembler,
+            time_limit=s.time_limit,
+            lm_lambda=self.lm_lambda,
+        )
+        self.lm_lambda = min(max(lam, 1e-6), 1e-2)
+        if not np.all(np.isfinite(x)):
+            raise SolverError(f"fast solver produced non-finite positions ({st.message})")
+        ms = (time.perf_counter() - t0) * 1000.0
+        return FoldResult(
+            positions=model.to_mm(x),
+            fold_angles=self.edge_angles(theta),
+            iterations=st.iterations,
+            force_evaluations=st.force_evaluations + st.energy_evaluations,
+            converged=st.converged,
+            residual=st.residual,
+            energy=ev.energy,
+            simulation_ms=ms,
+            message=st.message,
+            method=self.method,
+            hessian_assemblies=st.hessian_assemblies,
+            linear_solves=st.linear_solves,
+            theta=theta,
+        )
+
+
+def solve(
+    mesh: FoldMesh,
+    percent: float = 1.0,
+    method: str = "fast",
+    settings: SolverSettings | None = None,
+    start: np.ndarray | None = None,
+) -> FoldResult:
+    """Fold ``mesh`` to equilibrium at ``percent`` (1.0 = 100 %) with ``method`` (see module docstring).
+
+    ``start`` (``(n, 3)`` mm) warm-starts the solve; default is the flat sheet. Raises :class:`SolverError` on
+    divergence; a run that hits its iteration/step/time cap returns with ``converged=False`` and the residual reached.
+    """
+    return Solver(mesh, settings, method).solve(percent, start=start)

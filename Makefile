@@ -1,0 +1,43 @@
+# Curved Fold developer commands. The two the README promises:
+#   make test   set up (once), lint, run the whole suite on bpy 5.0.1 and on bpy 4.5 (LTS)
+#   make demo   fold every example pattern into out/ (or say where it stopped)
+# Others: make setup | lint | format | build | clean
+
+VENV      := .venv
+VENV_LTS  := .venv-4.5
+PY        := $(VENV)/bin/python
+PY_LTS    := $(VENV_LTS)/bin/python
+STAMP     := $(VENV)/.curved_fold-setup.stamp
+PYTEST_ARGS ?=
+PYTEST    := -m pytest -q --durations=10 $(PYTEST_ARGS)
+
+.PHONY: setup test lint format build demo clean
+
+setup: $(STAMP)
+
+# Re-run the set-up only when the script changed or a venv is missing (second `make setup` is instant).
+$(STAMP): tools/setup.sh
+	bash tools/setup.sh
+	touch $(STAMP)
+
+lint: setup
+	$(VENV)/bin/ruff check .
+
+format: setup
+	$(VENV)/bin/ruff format .
+
+# pytest exit code 5 ("no tests collected") is non-zero, so make fails on it as on any failure.
+test: setup lint
+	@echo "== pytest on bpy 5.0.1 ($(VENV)) =="
+	BLENDER_USER_RESOURCES="$$(mktemp -d)" $(PY) $(PYTEST)
+	@echo "== pytest on bpy 4.5 LTS ($(VENV_LTS)) =="
+	BLENDER_USER_RESOURCES="$$(mktemp -d)" $(PY_LTS) $(PYTEST)
+
+build: setup
+	$(PY) tools/build_extension.py --bundle-triangle --out dist/
+
+demo: setup
+	$(PY) tools/demo.py
+
+clean:
+	rm -rf dist out .pytest_cache .hypothesis

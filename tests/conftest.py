@@ -1,0 +1,132 @@
+"""Shared pytest harness: test the add-on AS BLENDER LOADS IT (built zip → installed extension → enabled).
+
+Pure engine tests (``core``, CLI) need nothing from here and never import ``bpy``: the fixtures below are not
+autouse, so they pay nothing.
+
+Blender-level tests ask for two fixtures::
+
+    import importlib
+
+    def test_fold_operator(extension, clean_scene):
+        # `extension` is the enabled module, e.g. bl_ext.cf_pytest.curved_fold
+        curves = importlib.import_module(extension.__name__ + ".scene.curves")   # the INSTALLED copy
+        ...
+        assert bpy.ops.curved_fold.set_crease_role(role="VALLEY") == {"FINISHED"}
+
+* ``extension`` (session): once per session it resets Blender with ``read_factory_settings(use_empty=True)``,
+  builds the licence-clean zip with Blender's own builder (``tools/build_extension.py``; the manifest and the zip
+  are validated), installs it with Blender's ``install-file`` into a throw-away user repository ``cf_pytest`` and
+  enables it as ``bl_ext.cf_pytest.curved_fold``. It yields that module and disables it at the end. Because the
+  installed copy is what Blender imports, relative-import mistakes and files missing from the zip show up here.
+  Use the module it yields (or ``bpy.ops.curved_fold`` / ``bpy.types.Object.curved_fold``) in Blender tests rather
+  than ``import curved_fold``: the dev package and the installed copy are different module objects, so their
+  classes are not interchangeable (``isinstance`` across them fails).
+* ``clean_scene`` (function): ``read_homefile(use_empty=True)`` before the test (~8 ms): empty data, add-on still
+  enabled. It yields ``bpy.context.scene``.
+* ``extension_zip`` (session): the path of the licence-clean zip the session built.
+
+Never call ``read_factory_settings`` in a test: it disables every add-on (blender-notes §2.1).
+
+``BLENDER_USER_RESOURCES`` is pointed at a fresh temporary folder when this file is imported (before anything
+imports ``bpy``) unless the caller already set it (``make test`` does), so no developer preferences or extensions
+leak in and nothing is written to ``~/.config/blender``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import os
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = Path(__file__).resolve().parents[2] / "shared"
+FIXTURES = SHARED / "fixtures"
+
+REPO_MODULE = "cf_pytest"
+"""Module name of the throw-away extension repository the session installs into."""
+EXTENSION_ID = "curved_fold"
+
+_USER_RESOURCES_OWNED = "BLENDER_USER_RESOURCES" not in os.environ
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="curved_fold_user_"))
+
+
+def load_build_tool() -> ModuleType:
+    """Import ``tools/build_extension.py`` (not part of the package, so not importable by name)."""
+    name = "curved_fold_build_extension"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, REPO / "tools" / "build_extension.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="session")
+def extension_zip(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The licence-clean zip, built and validated once per session by Blender's builder."""
+    tool = load_build_tool()
+    return tool.build_clean(tmp_path_factory.mktemp("dist"))
+
+
+@pytest.fixture(scope="session")
+def extension(extension_zip: Path, tmp_path_factory: pytest.TempPathFactory):
+    """Install the built zip into a temporary user repository, enable it, yield the enabled module; disable after."""
+    import addon_utils
+    import bpy
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    from bl_pkg import bl_extension_cli
+
+    repo_dir = tmp_path_factory.mktemp("extension_repo")
+    repos = bpy.context.preferences.extensions.repos
+    repo = repos.get(REPO_MODULE) if hasattr(repos, "get") else None
+    if repo is None:
+        repo = repos.new(name="Curved Fold tests", module=REPO_MODULE, custom_directory=str(repo_dir), source="USER")
+    rc = bl_extension_cli.cli_extension_handler(["install-file", "-r", REPO_MODULE, "-e", str(extension_zip)])
+    module_name = f"bl_ext.{REPO_MODULE}.{EXTENSION_ID}"
+    if rc not in (0, None):
+        pytest.fail(f"installing {extension_zip} into repo {REPO_MODULE!r} failed with exit code {rc}")
+    loaded_default, loaded_state = addon_utils.check(module_name)
+    if not loaded_state:
+        errors: list[str] = []
+        addon_utils.enable(module_name, default_set=True, handle_error=lambda exc: errors.append(repr(exc)))
+        if errors or not addon_utils.check(module_name)[1]:
+            pytest.fail(f"enabling {module_name} failed: {errors or 'unknown error'}")
+    module = sys.modules[module_name]
+    try:
+        yield module
+    finally:
+        if addon_utils.check(module_name)[1]:
+            addon_utils.disable(module_name, default_set=True)
+        if _USER_RESOURCES_OWNED:
+            shutil.rmtree(os.environ["BLENDER_USER_RESOURCES"], ignore_errors=True)
+
+
+@pytest.fixture
+def clean_scene(extension):
+    """An empty file (``read_homefile(use_empty=True)``) with the extension still enabled; yields the scene."""
+    import bpy
+
+    bpy.ops.wm.read_homefile(use_empty=True)
+    yield bpy.context.scene
+
+
+def ext_module(extension: ModuleType, name: str) -> ModuleType:
+    """Import ``<extension>.<name>`` from the installed copy, e.g. ``ext_module(extension, "scene.curves")``."""
+    return importlib.import_module(f"{extension.__name__}.{name}")
+
+
+@pytest.fixture(scope="session")
+def fixtures_dir() -> Path:
+    """``/work/shared/fixtures`` (shared, never copied into the repo); skips when it is absent."""
+    if not FIXTURES.is_dir():
+        pytest.skip(f"shared fixtures folder {FIXTURES} is absent")
+    return FIXTURES

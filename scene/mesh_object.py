@@ -1,0 +1,479 @@
+"""Write a folded :class:`~..core.mesh.FoldMesh` into Blender as a mesh object, and read it back.
+
+The object carries the whole flat pattern as attributes, so re-folding and baking never rebuild it:
+
+* ``cf_flat`` (FLOAT2, point): flat position in mm, in the sheet's plane
+* ``cf_assignment`` (INT8, edge): index into :data:`~..core.pattern.ASSIGNMENTS` (B M V F U C)
+* ``cf_fold_angle`` (FLOAT, edge): target fold angle in degrees (valley > 0), ``nan`` for no target
+* ``cf_fold_angle_sim`` (FLOAT, edge): simulated fold angle of the last run
+* ``cf_from_curve`` (BOOLEAN, edge), ``cf_polyline`` (INT, edge): which edges discretise a drawn curve/stroke
+* ``cf_face`` (INT, face): crease-pattern face each triangle belongs to
+* ``cf_strain`` / ``cf_warp`` (FLOAT_COLOR, point / face): Origami Simulator's strain colours and warp angle
+  colours, for the viewport's Attribute colour mode; ``cf_strain_pct`` / ``cf_warp_deg`` hold the raw values.
+
+Crease edges are shown as two child curve objects (``<name> Mountain`` in red, ``<name> Valley`` in blue, a small
+bevel so they render in Solid, Workbench and Cycles alike); they follow every re-fold and every baked frame.
+
+Positions are millimetres in :mod:`..core`; Blender units are ``mm / (1000 · scale_length)``, the inverse of
+``scene.curves.curves_from_objects``.
+"""
+
+from __future__ import annotations
+
+import colorsys
+
+import bpy
+import numpy as np
+
+from ..core.mesh import FoldMesh
+from ..core.pattern import ASSIGNMENTS
+
+CREASE_COLOURS = {"M": (1.0, 0.0, 0.0, 1.0), "V": (0.0, 0.1, 1.0, 1.0)}
+"""Viewport colours of crease edges, as Origami Simulator draws them (mountain red, valley blue)."""
+
+STRAIN_CLIP_PCT = 5.0
+"""Strain (percent) at which the strain colour saturates to red (Origami Simulator's ``strainClip``)."""
+
+WARP_CLIP_DEG = 5.0
+"""Warp angle (degrees) at which the warp colour saturates to red."""
+
+_EDGE_ATTRS = ("cf_assignment", "cf_fold_angle", "cf_fold_angle_sim", "cf_from_curve", "cf_polyline")
+
+
+def mm_per_unit(scene: bpy.types.Scene | None = None) -> float:
+    """Millimetres per Blender unit in ``scene`` (1 BU = 1000 mm × ``unit_settings.scale_length``)."""
+    scene = scene or bpy.context.scene
+    scale = float(scene.unit_settings.scale_length) if scene is not None else 1.0
+    return 1000.0 * (scale if scale > 0 else 1.0)
+
+
+def _edge_keys(edges: np.ndarray, n: int) -> np.ndarray:
+    e = np.sort(np.asarray(edges, dtype=np.int64).reshape(-1, 2), axis=1)
+    return e[:, 0] * n + e[:, 1]
+
+
+def blender_edge_order(me: bpy.types.Mesh, mesh: FoldMesh) -> np.ndarray:
+    """For each Blender edge of ``me``, the index of the same edge in ``mesh.edges`` (vectorised key lookup).
+
+    Blender builds its own edge list from the faces, so the order differs from the FoldMesh's; every attribute
+    write goes through this permutation. Raises ``ValueError`` naming the first edge that has no partner.
+    """
+    n = len(me.vertices)
+    be = np.empty(len(me.edges) * 2, dtype=np.int32)
+    me.edges.foreach_get("vertices", be)
+    bkeys = _edge_keys(be, n)
+    fkeys = _edge_keys(mesh.edges, n)
+    order = np.argsort(fkeys)
+    pos = np.searchsorted(fkeys[order], bkeys)
+    pos = np.clip(pos, 0, len(order) - 1)
+    found = order[pos]
+    bad = fkeys[found] != bkeys
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"mesh '{me.name}': Blender edge {i} {be[2 * i : 2 * i + 2].tolist()} is not in the fold mesh")
+    return found
+
+
+def _set_attr(me: bpy.types.Mesh, name: str, type_: str, domain: str, values: np.ndarray, key: str) -> None:
+    attr = me.attributes.get(name)
+    if attr is not None and (attr.data_type != type_ or attr.domain != domain):
+        me.attributes.remove(attr)
+        attr = None
+    if attr is None:
+        attr = me.attributes.new(name=name, type=type_, domain=domain)
+    attr.data.foreach_set(key, np.ascontiguousarray(values).ravel())
+
+
+def _get_attr(me: bpy.types.Mesh, name: str, key: str, dtype, count: int, width: int = 1) -> np.ndarray:
+    attr = me.attributes.get(name)
+    if attr is None:
+        raise ValueError(f"mesh '{me.name}' has no '{name}' attribute: it was not made by Curved Fold's Fold operator")
+    out = np.empty(count * width, dtype=dtype)
+    attr.data.foreach_get(key, out)
+    return out.reshape(-1, width) if width > 1 else out
+
+
+def assignment_codes(assignments: np.ndarray) -> np.ndarray:
+    """FOLD letters → their index in :data:`ASSIGNMENTS` (the ``cf_assignment`` code), vectorised."""
+    letters = np.asarray(assignments, dtype="<U1")
+    codes = np.full(len(letters), -1, dtype=np.int32)
+    for i, a in enumerate(ASSIGNMENTS):
+        codes[letters == a] = i
+    if (codes < 0).any():
+        bad = int(np.flatnonzero(codes < 0)[0])
+        raise ValueError(f"edge {bad} has unknown assignment {letters[bad]!r}; expected one of {ASSIGNMENTS}")
+    return codes
+
+
+def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def heat_colours(values: np.ndarray, clip: float) -> np.ndarray:
+    """Origami Simulator's strain colour map: hue 0.7·(1 − min(v, clip)/clip), s 1, l 0.5; blue 0 → red ≥ clip.
+
+    Returns linear RGBA float32 ``(k, 4)`` (Blender's FLOAT_COLOR attributes are scene-linear). Non-finite values
+    are grey.
+    """
+    v = np.asarray(values, dtype=np.float64).reshape(-1)
+    finite = np.isfinite(v)
+    t = np.clip(np.where(finite, v, 0.0) / clip, 0.0, 1.0)
+    # colorsys is scalar; the palette is quantised to 256 steps and looked up vectorised.
+    lut = np.array([colorsys.hls_to_rgb(0.7 * (1.0 - k / 255.0), 0.5, 1.0) for k in range(256)])
+    rgb = lut[np.rint(t * 255).astype(int)]
+    rgb[~finite] = 0.5
+    out = np.ones((len(v), 4), dtype=np.float32)
+    out[:, :3] = _srgb_to_linear(rgb)
+    return out
+
+
+def _material(name: str, colour: tuple[float, float, float, float]) -> bpy.types.Material:
+    mat = bpy.data.materials.get(name)
+    if mat is None:
+        mat = bpy.data.materials.new(name)
+        mat.diffuse_color = colour  # Solid/Workbench
+        try:
+            if mat.node_tree is None:  # Blender < 5.0 (5.0 deprecates use_nodes: materials always have nodes)
+                mat.use_nodes = True
+            bsdf = mat.node_tree.nodes.get("Principled BSDF")
+            if bsdf is not None:
+                bsdf.inputs["Base Color"].default_value = colour
+        except (AttributeError, KeyError, TypeError):  # pragma: no cover - node API differences
+            pass
+    return mat
+
+
+def chain_edges(edges: np.ndarray) -> list[np.ndarray]:
+    """Split an edge set into chains of vertex indices: walks through vertices of degree 2, ends at branch points.
+
+    Open chains start at their ends; what is left are closed loops (first vertex repeated at the end). Used for the
+    crease-curve children and the SVG export; not on any solver path.
+    """
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    adjacency: dict[int, list[int]] = {}
+    for k, (a, b) in enumerate(edges.tolist()):
+        adjacency.setdefault(a, []).append(k)
+        adjacency.setdefault(b, []).append(k)
+    used = np.zeros(len(edges), dtype=bool)
+    chains: list[np.ndarray] = []
+
+    def walk(start: int, k: int | None) -> np.ndarray:
+        chain = [start]
+        v = start
+        while k is not None and not used[k]:
+            used[k] = True
+            a, b = edges[k]
+            v = int(b if a == v else a)
+            chain.append(v)
+            nxt = [j for j in adjacency[v] if not used[j]]
+            k = nxt[0] if len(adjacency[v]) == 2 and nxt else None
+        return np.array(chain, dtype=np.int64)
+
+    for v, ks in adjacency.items():
+        if len(ks) != 2:
+            for k in ks:
+                if not used[k]:
+                    chains.append(walk(v, k))
+    for k in range(len(edges)):
+        if not used[k]:
+            chains.append(walk(int(edges[k][0]), k))
+    return chains
+
+
+def crease_polylines(mesh: FoldMesh, assignment: str) -> list[np.ndarray]:
+    """Chains of vertex indices along the crease edges of one assignment (``"M"`` or ``"V"``)."""
+    return chain_edges(mesh.edges[mesh.assignments == assignment])
+
+
+def _crease_curve_objects(ob: bpy.types.Object) -> dict[str, bpy.types.Object]:
+    return {
+        child["cf_crease_role"]: child
+        for child in ob.children
+        if child.type == "CURVE" and child.get("cf_crease_role") in CREASE_COLOURS
+    }
+
+
+def _write_crease_curves(ob: bpy.types.Object, mesh: FoldMesh, positions_bu: np.ndarray) -> list[bpy.types.Object]:
+    """Create (or rebuild) the red/blue crease-curve children of ``ob`` at ``positions_bu`` (local coordinates)."""
+    made = []
+    existing = _crease_curve_objects(ob)
+    size = max(float(np.ptp(positions_bu[:, 0])), float(np.ptp(positions_bu[:, 1])), 1e-9)
+    for role, label in (("M", "Mountain"), ("V", "Valley")):
+        chains = crease_polylines(mesh, role)
+        child = existing.get(role)
+        if not chains:
+            if child is not None:
+                data = child.data
+                bpy.data.objects.remove(child)
+                if data.users == 0:
+                    bpy.data.curves.remove(data)
+            continue
+        if child is None:
+            cu = bpy.data.curves.new(f"{ob.name} {label}", type="CURVE")
+            cu.dimensions = "3D"
+            child = bpy.data.objects.new(f"{ob.name} {label}", cu)
+            child["cf_crease_role"] = role
+            for coll in ob.users_collection:
+                coll.objects.link(child)
+            child.parent = ob
+            child.hide_select = True
+            cu.materials.append(_material(f"Curved Fold {label}", CREASE_COLOURS[role]))
+            child.color = CREASE_COLOURS[role]
+        cu = child.data
+        if cu.shape_keys is not None:
+            child.shape_key_clear()
+        cu.splines.clear()
+        cu.bevel_depth = 0.0025 * size
+        cu.bevel_resolution = 1
+        for chain in chains:
+            sp = cu.splines.new("POLY")
+            sp.points.add(len(chain) - 1)
+            co = np.ones((len(chain), 4), dtype=np.float32)
+            co[:, :3] = positions_bu[chain]
+            sp.points.foreach_set("co", co.ravel())
+        child["cf_chains"] = np.concatenate(chains).astype(np.int32).tolist()
+        made.append(child)
+    return made
+
+
+def crease_point_indices(child: bpy.types.Object) -> np.ndarray:
+    """Fold-mesh vertex index of every point of a crease-curve child, in spline order."""
+    return np.asarray(child.get("cf_chains", []), dtype=np.int64)
+
+
+def create_fold_object(
+    mesh: FoldMesh,
+    positions: np.ndarray,
+    name: str,
+    collection: bpy.types.Collection,
+    *,
+    fold_angles_sim: np.ndarray | None = None,
+    strain_pct: np.ndarray | None = None,
+    warp_deg: np.ndarray | None = None,
+    scene: bpy.types.Scene | None = None,
+    creases: bool = True,
+) -> bpy.types.Object:
+    """Make a new mesh object from ``mesh`` at ``positions`` (``(n, 3)`` mm) in ``collection``; return it.
+
+    All ``cf_`` attributes are written (see the module docstring). On any failure nothing is left behind: the
+    half-made object, its mesh and crease curves are removed before the exception propagates. ``creases=False``
+    skips the red/blue crease-curve children (exports).
+    """
+    positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    if len(positions) != mesh.n_vertices:
+        raise ValueError(f"positions have {len(positions)} rows, the fold mesh has {mesh.n_vertices} vertices")
+    scale = 1.0 / mm_per_unit(scene)
+    me = bpy.data.meshes.new(name)
+    ob = None
+    try:
+        me.from_pydata((positions * scale).tolist(), [], mesh.triangles.tolist())
+        me.update()
+        if len(me.edges) != len(mesh.edges):
+            raise ValueError(
+                f"fold mesh '{name}': Blender made {len(me.edges)} edges from {mesh.n_faces} triangles, "
+                f"the fold mesh lists {len(mesh.edges)} (an edge outside every triangle?)"
+            )
+        ob = bpy.data.objects.new(name, me)
+        collection.objects.link(ob)
+        write_pattern_attributes(ob, mesh)
+        if not creases:
+            ob["cf_no_creases"] = True
+        write_results(
+            ob, mesh, positions, fold_angles_sim=fold_angles_sim, strain_pct=strain_pct, warp_deg=warp_deg, scene=scene
+        )
+    except Exception:
+        remove_fold_object(ob, me)
+        raise
+    return ob
+
+
+def remove_fold_object(ob: bpy.types.Object | None, me: bpy.types.Mesh | None = None) -> None:
+    """Delete a fold object, its mesh and its crease-curve children (used to undo a failed write)."""
+    if ob is not None:
+        me = me or ob.data
+        for child in list(_crease_curve_objects(ob).values()):
+            cu = child.data
+            bpy.data.objects.remove(child)
+            if cu.users == 0:
+                bpy.data.curves.remove(cu)
+        bpy.data.objects.remove(ob)
+    if me is not None and me.users == 0:
+        bpy.data.meshes.remove(me)
+
+
+def write_pattern_attributes(ob: bpy.types.Object, mesh: FoldMesh) -> None:
+    """Store the flat pattern on ``ob``'s mesh: ``cf_flat``, ``cf_assignment``, ``cf_fold_angle``, ``cf_face``..."""
+    me = ob.data
+    perm = blender_edge_order(me, mesh)
+    codes = assignment_codes(mesh.assignments)
+    _set_attr(me, "cf_flat", "FLOAT2", "POINT", mesh.vertices.astype(np.float32), "vector")
+    _set_attr(me, "cf_assignment", "INT8", "EDGE", codes[perm].astype(np.int32), "value")
+    _set_attr(me, "cf_fold_angle", "FLOAT", "EDGE", mesh.fold_angles[perm].astype(np.float32), "value")
+    _set_attr(me, "cf_from_curve", "BOOLEAN", "EDGE", mesh.edge_from_curve[perm], "value")
+    _set_attr(me, "cf_polyline", "INT", "EDGE", mesh.edge_polyline[perm].astype(np.int32), "value")
+    tri_order = _blender_face_order(me, mesh)
+    _set_attr(me, "cf_face", "INT", "FACE", mesh.triangle_face[tri_order].astype(np.int32), "value")
+    me["cf_mesh_type"] = mesh.mesh_type
+    me["cf_swaps"] = int(mesh.swaps)
+    me["cf_sources"] = list(mesh.sources)
+
+
+def _blender_face_order(me: bpy.types.Mesh, mesh: FoldMesh) -> np.ndarray:
+    """Blender polygon i is FoldMesh triangle i (``from_pydata`` keeps face order); checked, not assumed."""
+    if len(me.polygons) != mesh.n_faces:
+        raise ValueError(f"mesh '{me.name}' has {len(me.polygons)} faces, the fold mesh has {mesh.n_faces}")
+    return np.arange(mesh.n_faces)
+
+
+def update_positions(ob: bpy.types.Object, positions: np.ndarray, *, scene: bpy.types.Scene | None = None) -> None:
+    """Move ``ob``'s vertices to ``positions`` (``(n, 3)`` mm); writes the Basis key when the mesh has shape keys.
+
+    Uses the fast float32 ``foreach_set`` paths (``attributes['position']`` / ``key.points``). The crease-curve
+    children follow.
+    """
+    me = ob.data
+    co = (np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene)).astype(np.float32)
+    if len(co) != len(me.vertices):
+        raise ValueError(f"object '{ob.name}' has {len(me.vertices)} vertices, got {len(co)} positions")
+    if me.shape_keys is not None:
+        me.shape_keys.reference_key.points.foreach_set("co", co.ravel())
+    me.attributes["position"].data.foreach_set("vector", co.ravel())
+    me.update()
+    for child in _crease_curve_objects(ob).values():
+        idx = crease_point_indices(child)
+        pts = np.ones((len(idx), 4), dtype=np.float32)
+        pts[:, :3] = co[idx]
+        offset = 0
+        for sp in child.data.splines:
+            k = len(sp.points)
+            sp.points.foreach_set("co", pts[offset : offset + k].ravel())
+            offset += k
+        child.data.update_tag()
+
+
+def write_results(
+    ob: bpy.types.Object,
+    mesh: FoldMesh,
+    positions: np.ndarray,
+    *,
+    fold_angles_sim: np.ndarray | None = None,
+    strain_pct: np.ndarray | None = None,
+    warp_deg: np.ndarray | None = None,
+    scene: bpy.types.Scene | None = None,
+) -> None:
+    """Write a solve's results onto ``ob``: positions, simulated fold angles, strain and warp colours, creases.
+
+    ``fold_angles_sim`` is per FoldMesh edge (deg), ``strain_pct`` per vertex (percent), ``warp_deg`` per triangle
+    or per vertex (degrees); missing ones are left as they were.
+    """
+    me = ob.data
+    update_positions(ob, positions, scene=scene)
+    if fold_angles_sim is not None:
+        perm = blender_edge_order(me, mesh)
+        sim = np.asarray(fold_angles_sim, dtype=np.float32)[perm]
+        _set_attr(me, "cf_fold_angle_sim", "FLOAT", "EDGE", sim, "value")
+    if strain_pct is not None:
+        s = np.asarray(strain_pct, dtype=np.float64).reshape(-1)
+        _set_attr(me, "cf_strain_pct", "FLOAT", "POINT", s.astype(np.float32), "value")
+        _set_attr(me, "cf_strain", "FLOAT_COLOR", "POINT", heat_colours(s, STRAIN_CLIP_PCT), "color")
+    if warp_deg is not None:
+        w = np.asarray(warp_deg, dtype=np.float64).reshape(-1)
+        domain = "FACE" if len(w) == mesh.n_faces else "POINT"
+        _set_attr(me, "cf_warp_deg", "FLOAT", domain, w.astype(np.float32), "value")
+        _set_attr(me, "cf_warp", "FLOAT_COLOR", domain, heat_colours(w, WARP_CLIP_DEG), "color")
+    if me.color_attributes.get("cf_strain") is not None and me.color_attributes.active_color is None:
+        me.color_attributes.active_color = me.color_attributes["cf_strain"]
+    co = np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene)
+    if ob.get("cf_no_creases"):
+        return
+    if not _crease_curve_objects(ob) or ob.get("cf_crease_topology") != _topology_key(mesh):
+        _write_crease_curves(ob, mesh, co)
+        ob["cf_crease_topology"] = _topology_key(mesh)
+
+
+def _topology_key(mesh: FoldMesh) -> str:
+    return f"{mesh.n_vertices}:{len(mesh.edges)}:{int(np.count_nonzero(np.isin(mesh.assignments, ('M', 'V'))))}"
+
+
+def read_fold_mesh(ob: bpy.types.Object) -> FoldMesh:
+    """Rebuild the flat :class:`FoldMesh` stored on a fold object (inverse of :func:`create_fold_object`).
+
+    Edges come back in Blender's order; the crease-pattern face loops are recovered from ``cf_face`` (the outer
+    boundary of each group of triangles). Raises ``ValueError`` naming the object when an attribute is missing.
+    """
+    if ob is None or ob.type != "MESH":
+        raise ValueError(f"'{getattr(ob, 'name', None)}' is not a mesh object")
+    me = ob.data
+    n, e, t = len(me.vertices), len(me.edges), len(me.polygons)
+    flat = _get_attr(me, "cf_flat", "vector", np.float32, n, 2).astype(np.float64)
+    edges = np.empty(2 * e, dtype=np.int64)
+    me.edges.foreach_get("vertices", edges)
+    edges = np.sort(edges.reshape(-1, 2), axis=1)
+    loops = np.empty(len(me.loops), dtype=np.int64)
+    me.loops.foreach_get("vertex_index", loops)
+    sizes = np.empty(t, dtype=np.int64)
+    me.polygons.foreach_get("loop_total", sizes)
+    if t and not np.all(sizes == 3):
+        raise ValueError(f"mesh '{me.name}' has non-triangle faces: was it edited after folding?")
+    triangles = loops.reshape(-1, 3)
+    codes = _get_attr(me, "cf_assignment", "value", np.int32, e)
+    angles = _get_attr(me, "cf_fold_angle", "value", np.float32, e).astype(np.float64)
+    from_curve = _get_attr(me, "cf_from_curve", "value", bool, e)
+    polyline = _get_attr(me, "cf_polyline", "value", np.int32, e).astype(np.int64)
+    tri_face = _get_attr(me, "cf_face", "value", np.int32, t).astype(np.int64)
+    assignments = np.array(ASSIGNMENTS)[np.clip(codes, 0, len(ASSIGNMENTS) - 1)]
+    return FoldMesh(
+        vertices=flat,
+        triangles=triangles,
+        edges=edges,
+        assignments=assignments,
+        fold_angles=angles,
+        edge_from_curve=from_curve,
+        edge_polyline=polyline,
+        triangle_face=tri_face,
+        faces=face_loops(triangles, tri_face),
+        mesh_type=str(me.get("cf_mesh_type", "ruling")),
+        swaps=int(me.get("cf_swaps", 0)),
+        sources=[str(s) for s in me.get("cf_sources", [])],
+    )
+
+
+def face_loops(triangles: np.ndarray, triangle_face: np.ndarray) -> list[np.ndarray]:
+    """Counter-clockwise outer boundary loop of each crease-pattern face (a group of triangles with one label).
+
+    A directed triangle side belongs to the boundary when its reverse is not a side of the same face; the sides are
+    then chained. Faces with holes keep their longest loop.
+    """
+    tri = np.asarray(triangles, dtype=np.int64)
+    labels = np.asarray(triangle_face, dtype=np.int64)
+    if not len(tri):
+        return []
+    half = np.stack([tri, np.roll(tri, -1, axis=1)], axis=2).reshape(-1, 2)
+    face_of = np.repeat(labels, 3)
+    n = int(tri.max()) + 1
+    keys = (face_of * n + half[:, 0]) * n + half[:, 1]
+    rkeys = (face_of * n + half[:, 1]) * n + half[:, 0]
+    boundary = ~np.isin(keys, rkeys)
+    out: list[np.ndarray] = []
+    for f in range(int(labels.max()) + 1):
+        sel = half[boundary & (face_of == f)]
+        if not len(sel):
+            out.append(np.zeros(0, dtype=np.int64))
+            continue
+        nxt = dict(zip(sel[:, 0].tolist(), sel[:, 1].tolist(), strict=False))
+        best: list[int] = []
+        seen: set[int] = set()
+        for start in sel[:, 0].tolist():
+            if start in seen:
+                continue
+            loop = [start]
+            seen.add(start)
+            v = nxt[start]
+            while v != start and v in nxt and v not in seen and len(loop) <= len(sel):
+                loop.append(v)
+                seen.add(v)
+                v = nxt[v]
+            if len(loop) > len(best):
+                best = loop
+        out.append(np.array(best, dtype=np.int64))
+    return out

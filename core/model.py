@@ -104,7 +104,7 @@ def _hinge_topology(mesh: FoldMesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     if len(order) == 0 or not np.all(edge_key[order][pos] == side_key):
         bad = int(np.flatnonzero(edge_key[order][pos] != side_key)[0]) if len(order) else 0
         raise PatternError(
-            f"triangle {bad // 3} side ({src[bad]}, {dst[bad]}) is not in the mesh's edge list; the mesh is inconsistent"
+            f"triangle {bad // 3} side ({src[bad]}, {dst[bad]}) is missing from the edge list (inconsistent mesh)"
         )
     side_edge = order[pos]
     forward = src == mesh.edges[side_edge, 0]

@@ -27,7 +27,7 @@ from .solver_newton import HessianAssembler, newton_solve
 
 METHODS = ("fast", "faithful", "isometric")
 
-__all__ = ["METHODS", "FoldResult", "SolverError", "SolverSettings", "Solver", "solve"]
+__all__ = ["METHODS", "FoldResult", "SolverError", "SolverSettings", "Solver", "rigid_rms", "solve"]
 
 
 @dataclass
@@ -236,3 +236,15 @@ def solve(
     divergence; a run that hits its iteration/step/time cap returns with ``converged=False`` and the residual reached.
     """
     return Solver(mesh, settings, method).solve(percent, start=start)
+
+
+def rigid_rms(a: np.ndarray, b: np.ndarray) -> float:
+    """RMS distance between point sets ``a`` and ``b`` (``(n, 3)``) after the best rigid (Kabsch) alignment of ``a``
+    onto ``b`` (rotation without reflection)."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    ac, bc = a - a.mean(axis=0), b - b.mean(axis=0)
+    u, _, vt = np.linalg.svd(ac.T @ bc)
+    d = np.sign(np.linalg.det(u @ vt)) or 1.0
+    rot = u @ np.diag([1.0, 1.0, d]) @ vt
+    return float(np.sqrt(np.mean(np.sum((ac @ rot - bc) ** 2, axis=1))))

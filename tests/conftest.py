@@ -79,17 +79,17 @@ def extension_zip(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture(scope="session")
 def extension(extension_zip: Path, tmp_path_factory: pytest.TempPathFactory):
     """Install the built zip into a temporary user repository, enable it, yield the enabled module; disable after."""
+    import bpy  # noqa: I001 - bpy first: it puts addon_utils and bl_pkg on sys.path
     import addon_utils
-    import bpy
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     from bl_pkg import bl_extension_cli
 
     repo_dir = tmp_path_factory.mktemp("extension_repo")
-    repos = bpy.context.preferences.extensions.repos
-    repo = repos.get(REPO_MODULE) if hasattr(repos, "get") else None
-    if repo is None:
-        repo = repos.new(name="Curved Fold tests", module=REPO_MODULE, custom_directory=str(repo_dir), source="USER")
+    if extension_repository() is None:
+        bpy.context.preferences.extensions.repos.new(
+            name="Curved Fold tests", module=REPO_MODULE, custom_directory=str(repo_dir), source="USER"
+        )
     rc = bl_extension_cli.cli_extension_handler(["install-file", "-r", REPO_MODULE, "-e", str(extension_zip)])
     module_name = f"bl_ext.{REPO_MODULE}.{EXTENSION_ID}"
     if rc not in (0, None):
@@ -108,6 +108,13 @@ def extension(extension_zip: Path, tmp_path_factory: pytest.TempPathFactory):
             addon_utils.disable(module_name, default_set=True)
         if _USER_RESOURCES_OWNED:
             shutil.rmtree(os.environ["BLENDER_USER_RESOURCES"], ignore_errors=True)
+
+
+def extension_repository():
+    """The throw-away extension repository (``bpy.types.UserExtensionRepo``) of the session, or ``None``."""
+    import bpy
+
+    return next((r for r in bpy.context.preferences.extensions.repos if r.module == REPO_MODULE), None)
 
 
 @pytest.fixture

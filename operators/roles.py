@@ -1,0 +1,111 @@
+"""Give selected curve objects a crease role and fold angle, and select curves by role.
+
+Thin operators over :mod:`..scene.properties`: the role and angle are stored on the object
+(``Object.curved_fold``); the colours follow from the role's update callback.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from ..scene.properties import ROLE_ITEMS
+
+_ANGLE_ROLES = {"MOUNTAIN", "VALLEY"}
+
+
+class CURVED_FOLD_OT_set_crease_role(bpy.types.Operator):
+    """Set the crease role (and fold angle) of the selected curve objects"""
+
+    bl_idname = "curved_fold.set_crease_role"
+    bl_label = "Set Crease Role"
+    bl_description = (
+        "Give the selected curve objects a crease role (border, mountain, valley, facet, undriven, cut) and, for "
+        "mountains and valleys, a fold angle; the curves are coloured as Origami Simulator draws them"
+    )
+    bl_options = {"REGISTER", "UNDO"}
+
+    role: bpy.props.EnumProperty(name="Role", description="Crease role to give the curves", items=ROLE_ITEMS)
+    fold_angle: bpy.props.FloatProperty(
+        name="Fold Angle",
+        description="Target fold angle in degrees (0 flat, 180 folded flat); mountains fold away from +Z, valleys "
+        "towards it. Used by mountains and valleys only",
+        default=180.0,
+        min=0.0,
+        max=180.0,
+        precision=1,
+    )
+
+    @classmethod
+    def poll(cls, context: bpy.types.Context) -> bool:
+        if not any(ob.type == "CURVE" for ob in (context.selected_objects or ())):
+            cls.poll_message_set("Select one or more curve objects")
+            return False
+        return True
+
+    def draw(self, context: bpy.types.Context) -> None:
+        layout = self.layout
+        layout.prop(self, "role")
+        row = layout.row()
+        row.active = self.role in _ANGLE_ROLES
+        row.prop(self, "fold_angle")
+
+    def execute(self, context: bpy.types.Context) -> set[str]:
+        curves = [ob for ob in context.selected_objects if ob.type == "CURVE"]
+        others = len(context.selected_objects) - len(curves)
+        if not curves:
+            self.report({"ERROR"}, "No curve objects selected: crease roles apply to curve objects only")
+            return {"CANCELLED"}
+        for ob in curves:
+            if self.role in _ANGLE_ROLES:
+                ob.curved_fold.fold_angle = self.fold_angle
+            ob.curved_fold.role = self.role
+        label = dict((item[0], item[1]) for item in ROLE_ITEMS)[self.role]
+        angle = f" ({self.fold_angle:g}°)" if self.role in _ANGLE_ROLES else ""
+        message = f"Crease role {label}{angle} set on {len(curves)} curve(s)"
+        if others:
+            message += f"; {others} non-curve object(s) left unchanged"
+        self.report({"INFO"}, message)
+        return {"FINISHED"}
+
+
+class CURVED_FOLD_OT_select_by_role(bpy.types.Operator):
+    """Select the curve objects that have a given crease role"""
+
+    bl_idname = "curved_fold.select_by_role"
+    bl_label = "Select Curves by Crease Role"
+    bl_description = "Select the visible curve objects with the given crease role"
+    bl_options = {"REGISTER", "UNDO"}
+
+    role: bpy.props.EnumProperty(name="Role", description="Crease role to select", items=ROLE_ITEMS, default="VALLEY")
+    extend: bpy.props.BoolProperty(name="Extend", description="Add to the current selection", default=False)
+
+    def execute(self, context: bpy.types.Context) -> set[str]:
+        view_layer = context.view_layer
+        count = 0
+        for ob in view_layer.objects:
+            match = ob.type == "CURVE" and ob.curved_fold.role == self.role and ob.visible_get(view_layer=view_layer)
+            if match:
+                ob.select_set(True, view_layer=view_layer)
+                count += 1
+            elif not self.extend:
+                ob.select_set(False, view_layer=view_layer)
+        self.report({"INFO"}, f"{count} curve(s) with crease role {self.role.title()} selected")
+        return {"FINISHED"}
+
+
+def _menu(self: bpy.types.Menu, context: bpy.types.Context) -> None:
+    layout = self.layout
+    layout.separator()
+    layout.operator_menu_enum(CURVED_FOLD_OT_set_crease_role.bl_idname, "role", text="Set Crease Role")
+    layout.operator_menu_enum(CURVED_FOLD_OT_select_by_role.bl_idname, "role", text="Select by Crease Role")
+
+
+CLASSES = (CURVED_FOLD_OT_set_crease_role, CURVED_FOLD_OT_select_by_role)
+
+
+def register_extra() -> None:
+    bpy.types.VIEW3D_MT_object.append(_menu)
+
+
+def unregister_extra() -> None:
+    bpy.types.VIEW3D_MT_object.remove(_menu)

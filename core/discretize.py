@@ -1,0 +1,582 @@
+"""Discretisation of a drawn crease pattern into straight segments (paper §3.1), and its planar clean-up.
+
+Steps, in order:
+
+1. **Curves.** Every curved segment (cubic Bézier, elliptical arc) is split at equal *parameter* steps, with the
+   smallest count for which every chord is at most ``interval``; then, as in the paper, the curve's parameter
+   midpoint is inserted wherever its distance from the chord exceeds ``tolerance``, repeatedly, until none is
+   left. Each segment is refined on its own, vectorised over its chords.
+2. **Straight segments.** Straight *border* segments are split into ⌈length / interval⌉ equal pieces so the
+   triangulation has border vertices to attach rulings to; straight creases are kept whole. Polyline input is
+   kept vertex for vertex (nearly collinear vertices are never removed: that would destroy flattened curves).
+3. **Planar arrangement.** Vertices closer than ``merge_tolerance`` are merged (into the first representative, as
+   Origami Simulator does; border vertices come first so the outline never moves); crossing segments (X) and
+   endpoints lying on another segment (T) are split at the intersection; zero-length and duplicate segments are
+   removed. Candidate pairs come from a uniform grid over the segments' bounding boxes, so the work grows with the
+   number of nearby pairs, not with E².
+4. **Outside pieces.** If the border is closed, crease pieces lying outside it (creases drawn slightly past the
+   edge of the sheet) are removed, with a warning.
+
+Defaults follow the paper (150 mm sheet: interval 7 mm, tolerance 0.07 mm) and are **scale-aware**: multiplied by
+sheet size / 150 mm, where the sheet size is the largest extent of the border's bounding box (of all curves if
+there is no border). See :data:`MERGE_PER_150` for the merge tolerance.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .pattern import CreaseCurve, CreasePattern, CurveSegment, PatternError
+
+REFERENCE_SIZE_MM = 150.0
+"""Sheet width the paper's parameters were chosen for (§4)."""
+
+INTERVAL_PER_150 = 7.0
+"""Paper §4: maximum chord length (and border piece length) for a 150 mm sheet, mm."""
+
+TOLERANCE_PER_150 = 0.07
+"""Paper §4: maximum distance of a curve's parameter midpoint from its chord for a 150 mm sheet, mm."""
+
+MERGE_PER_150 = 0.05
+"""Default merge tolerance for a 150 mm sheet, mm (the paper used Origami Simulator's 1.0 mm).
+
+1.0 mm per 150 mm would collapse genuine segments of the dense fixtures. Shortest drawn segments measured in
+``/work/shared/fixtures/origami-simulator``, scaled to a 150 mm sheet (sheet size as :func:`sheet_size`):
+``shell14`` 0.063 mm (ruling rungs at the panel tips), ``huffmanTower`` 0.104 mm (facet fans), ``Carved_Cylinder``
+0.83 mm, ``Treble_Clef`` 1.53 mm, ``CircularPleat-antiFacet`` 1.88 mm (border ring chords), ``miura-ori`` 10 mm.
+Our own curve chords go down to ≈ sqrt(8·tolerance·radius) (0.3 mm on a 0.2 mm-radius bend at the default
+tolerance). 0.05 mm per 150 mm is below every one of them (20 % margin on shell14) yet far above float noise,
+so endpoints that designers snapped by eye in drawing programs (typically within 0.01 mm) are still welded.
+"""
+
+MAX_SEGMENTS = 200_000
+"""Guard against explosion: discretisation parameters that would produce more segments than this are enlarged."""
+
+PRIORITY = {"B": 0, "C": 1, "M": 2, "V": 2, "U": 3, "F": 4}
+"""Which assignment wins when two drawn segments coincide: the sheet outline first (a crease on the border cannot
+fold: it has one face), then cuts, creases with a target, undriven hinges, and facet lines last."""
+
+
+def default_parameters(size_mm: float) -> tuple[float, float, float]:
+    """Paper defaults scaled to the sheet: ``(interval, tolerance, merge_tolerance)`` in mm."""
+    if not (size_mm > 0 and math.isfinite(size_mm)):
+        raise PatternError(f"crease pattern: sheet size {size_mm!r} mm is not a positive number")
+    k = size_mm / REFERENCE_SIZE_MM
+    return INTERVAL_PER_150 * k, TOLERANCE_PER_150 * k, MERGE_PER_150 * k
+
+
+# ---------------------------------------------------------------------------------------------------- curves
+
+
+def _segment_length(seg: CurveSegment, samples: int = 256) -> float:
+    if seg.kind == "line":
+        return float(np.hypot(*(seg.points[1] - seg.points[0])))
+    p = seg.evaluate(np.linspace(0.0, 1.0, samples + 1))
+    return float(np.hypot(*np.diff(p, axis=0).T).sum())
+
+
+def _estimate_pieces(seg: CurveSegment, interval: float, tolerance: float) -> float:
+    """Rough number of chords a curved segment needs: max(length/interval, ∫ sqrt(κ / 8·tol) ds)."""
+    p = seg.evaluate(np.linspace(0.0, 1.0, 257))
+    d = np.diff(p, axis=0)
+    ds = np.hypot(d[:, 0], d[:, 1])
+    length = float(ds.sum())
+    ang = np.arctan2(d[:, 1], d[:, 0])
+    turn = np.abs((np.diff(ang) + np.pi) % (2 * np.pi) - np.pi)
+    local = 0.5 * (ds[1:] + ds[:-1])
+    by_tol = float(np.sqrt(turn * local / (8.0 * tolerance)).sum())
+    return max(length / interval, by_tol, 1.0)
+
+
+def _point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    ab = b - a
+    ll = np.einsum("ij,ij->i", ab, ab)
+    t = np.where(ll > 0, np.einsum("ij,ij->i", p - a, ab) / np.where(ll > 0, ll, 1.0), 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    q = a + t[:, None] * ab
+    return np.hypot(*(p - q).T)
+
+
+def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budget: int = MAX_SEGMENTS) -> np.ndarray:
+    """Parameters of the polyline vertices of one curved segment (paper §3.1), sorted, starting 0 and ending 1.
+
+    Equal parameter steps with the smallest count whose chords are all ≤ ``interval``, then repeated insertion of
+    the parameter midpoint of every chord whose curve midpoint is farther than ``tolerance`` from it. Stops early
+    (returning what it has) if the count would exceed ``budget``.
+    """
+    length = _segment_length(seg)
+    n = max(1, math.ceil(length / interval))
+    tries = 0
+    while True:
+        t = np.linspace(0.0, 1.0, n + 1)
+        p = seg.evaluate(t)
+        longest = float(np.hypot(*np.diff(p, axis=0).T).max())
+        if longest <= interval * (1 + 1e-12) or n >= budget:
+            break
+        tries += 1
+        n = n + 1 if tries < 64 else math.ceil(n * 1.25)
+    for _ in range(64):
+        tm = 0.5 * (t[:-1] + t[1:])
+        pm = seg.evaluate(tm)
+        dist = _point_segment_distance(pm, p[:-1], p[1:])
+        bad = dist > tolerance
+        if not bad.any() or len(t) + int(bad.sum()) > budget + 1:
+            break
+        order = np.argsort(np.concatenate([t, tm[bad]]), kind="stable")
+        t = np.concatenate([t, tm[bad]])[order]
+        p = np.concatenate([p, pm[bad]])[order]
+    return t
+
+
+def _segment_polyline(
+    seg: CurveSegment, assignment: str, interval: float, tolerance: float, budget: int
+) -> tuple[np.ndarray, bool]:
+    """Polyline points of one drawn segment and whether they discretise a curve (see module docstring)."""
+    start, end = seg.points[0], seg.points[-1]
+    if seg.is_straight:
+        if assignment == "B":
+            length = float(np.hypot(*(end - start)))
+            n = max(1, math.ceil(length / interval - 1e-9))
+            s = np.linspace(0.0, 1.0, n + 1)[:, None]
+            pts = (1.0 - s) * start + s * end
+        else:
+            pts = np.array([start, end], dtype=float)
+        pts[0], pts[-1] = start, end
+        return pts, False
+    t = curve_parameters(seg, interval, tolerance, budget)
+    pts = seg.evaluate(t)
+    pts[0], pts[-1] = start, end  # exact joints with the neighbouring segments
+    return pts, True
+
+
+# ---------------------------------------------------------------------------------------------------- arrangement
+
+
+def _merge_points(pts: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Merge points closer than ``tol`` into the first representative (input order), as Origami Simulator does.
+
+    Returns ``(representative_points, index)`` with ``pts[i] ≈ representative_points[index[i]]``. Exact duplicates
+    go through :func:`numpy.unique`; near pairs come from a hash grid of cell ``tol`` (3×3 neighbourhood).
+    """
+    if len(pts) == 0:
+        return pts.reshape(0, 2), np.zeros(0, dtype=np.int64)
+    uniq, first, inv = np.unique(pts, axis=0, return_index=True, return_inverse=True)
+    inv = inv.reshape(-1)
+    order = np.argsort(first, kind="stable")  # unique points in order of first appearance
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    u = uniq[order]
+    inv = rank[inv]
+    k = len(u)
+    rep = np.arange(k)
+    if tol > 0 and k > 1:
+        cell = np.floor((u - u.min(axis=0)) / tol).astype(np.int64)
+        width = int(cell[:, 1].max()) + 3
+        code = cell[:, 0] * width + cell[:, 1]
+        srt = np.argsort(code, kind="stable")
+        code_s = code[srt]
+        pairs_i, pairs_j = [], []
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                target = code + dx * width + dy
+                lo = np.searchsorted(code_s, target, "left")
+                hi = np.searchsorted(code_s, target, "right")
+                cnt = hi - lo
+                if not cnt.any():
+                    continue
+                i = np.repeat(np.arange(k), cnt)
+                offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+                j = srt[np.repeat(lo, cnt) + offs]
+                keep = j > i
+                pairs_i.append(i[keep])
+                pairs_j.append(j[keep])
+        pi = np.concatenate(pairs_i) if pairs_i else np.zeros(0, np.int64)
+        pj = np.concatenate(pairs_j) if pairs_j else np.zeros(0, np.int64)
+        close = np.hypot(*(u[pi] - u[pj]).T) < tol
+        pi, pj = pi[close], pj[close]
+        if len(pi):
+            o = np.lexsort((pi, pj))
+            # Greedy in input order: j joins the first earlier point that is still its own representative.
+            for i, j in zip(pi[o].tolist(), pj[o].tolist(), strict=True):
+                if rep[j] == j and rep[i] == i:
+                    rep[j] = i
+    keep_idx = np.flatnonzero(rep == np.arange(k))
+    new_index = np.full(k, -1, dtype=np.int64)
+    new_index[keep_idx] = np.arange(len(keep_idx))
+    return u[keep_idx], new_index[rep][inv]
+
+
+def _candidate_pairs(a: np.ndarray, b: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (i < j) of segments whose tol-expanded bounding boxes overlap, via a uniform grid."""
+    m = len(a)
+    if m < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    lo = np.minimum(a, b) - tol
+    hi = np.maximum(a, b) + tol
+    origin = lo.min(axis=0)
+    lengths = np.hypot(*(b - a).T)
+    extent = float(np.max(hi.max(axis=0) - origin))
+    h = max(2.0 * float(np.median(lengths)), extent / 2048.0, 1e-9)
+    while True:
+        c0 = np.floor((lo - origin) / h).astype(np.int64)
+        c1 = np.floor((hi - origin) / h).astype(np.int64)
+        nx = c1[:, 0] - c0[:, 0] + 1
+        ny = c1[:, 1] - c0[:, 1] + 1
+        cnt = nx * ny
+        if cnt.sum() <= 4_000_000:
+            break
+        h *= 2.0
+    seg = np.repeat(np.arange(m), cnt)
+    local = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    cx = c0[seg, 0] + local // ny[seg]
+    cy = c0[seg, 1] + local % ny[seg]
+    width = int(c1[:, 1].max()) + 2
+    code = cx * width + cy
+    order = np.lexsort((seg, code))
+    code, seg = code[order], seg[order]
+    # Groups of equal cell code; every entry pairs with the later entries of its group.
+    starts = np.flatnonzero(np.r_[True, code[1:] != code[:-1]])
+    sizes = np.diff(np.r_[starts, len(code)])
+    group_end = np.repeat(starts + sizes, sizes)
+    pos = np.arange(len(code))
+    partners = group_end - pos - 1
+    total = int(partners.sum())
+    if total == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    src = np.repeat(pos, partners)
+    off = np.arange(total) - np.repeat(np.cumsum(partners) - partners, partners)
+    i, j = seg[src], seg[src + 1 + off]
+    i, j = np.minimum(i, j), np.maximum(i, j)
+    keep = i != j
+    key = np.unique(i[keep] * m + j[keep])
+    i, j = key // m, key % m
+    overlap = np.all(lo[i] <= hi[j], axis=1) & np.all(lo[j] <= hi[i], axis=1)
+    return i[overlap], j[overlap]
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+
+
+def _split_records(
+    verts: np.ndarray, edges: np.ndarray, tol: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Where segments must be split: ``(edge, distance along it, vertex id or -1-k for new point k, new points)``.
+
+    X crossings get one new point shared by both segments; T-junctions (an endpoint within ``tol`` of another
+    segment's interior) and collinear overlaps split at the existing endpoint.
+    """
+    a, b = verts[edges[:, 0]], verts[edges[:, 1]]
+    i, j = _candidate_pairs(a, b, tol)
+    shared = (
+        (edges[i, 0] == edges[j, 0])
+        | (edges[i, 0] == edges[j, 1])
+        | (edges[i, 1] == edges[j, 0])
+        | (edges[i, 1] == edges[j, 1])
+    )
+    rec_e, rec_d, rec_v = [], [], []
+    new_pts: list[np.ndarray] = []
+    n_new = 0
+    p, r = a[i], b[i] - a[i]
+    q, s = a[j], b[j] - a[j]
+    la, lb = np.hypot(*r.T), np.hypot(*s.T)
+    rxs = _cross(r, s)
+    qp = q - p
+    parallel = np.abs(rxs) <= 1e-10 * la * lb
+    # --- proper (non-parallel) intersections
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = _cross(qp, s) / rxs
+        u = _cross(qp, r) / rxs
+    da, db = t * la, u * lb
+    hit = ~parallel & (da >= -tol) & (da <= la + tol) & (db >= -tol) & (db <= lb + tol)
+    in_a = hit & (da > tol) & (da < la - tol)
+    in_b = hit & (db > tol) & (db < lb - tol)
+    # A shared endpoint can only meet the other segment again if they overlap: ignore for non-parallel pairs.
+    in_a &= ~shared
+    in_b &= ~shared
+    with np.errstate(invalid="ignore"):
+        x = p + t[:, None] * r
+    both = in_a & in_b
+    k = int(both.sum())
+    if k:
+        new_pts.append(x[both])
+        ids = -1 - (n_new + np.arange(k))
+        n_new += k
+        rec_e += [i[both], j[both]]
+        rec_d += [da[both], db[both]]
+        rec_v += [ids, ids]
+    # T: the split point is the other segment's endpoint that lies on this one.
+    ta = in_a & ~in_b
+    if ta.any():
+        near_end = db[ta] > lb[ta] / 2
+        v = np.where(near_end, edges[j[ta], 1], edges[j[ta], 0])
+        d = np.einsum("ij,ij->i", verts[v] - p[ta], r[ta]) / la[ta]
+        rec_e.append(i[ta])
+        rec_d.append(d)
+        rec_v.append(v)
+    tb = in_b & ~in_a
+    if tb.any():
+        near_end = da[tb] > la[tb] / 2
+        v = np.where(near_end, edges[i[tb], 1], edges[i[tb], 0])
+        d = np.einsum("ij,ij->i", verts[v] - q[tb], s[tb]) / lb[tb]
+        rec_e.append(j[tb])
+        rec_d.append(d)
+        rec_v.append(v)
+    # --- collinear overlaps: split each segment at the other's endpoints lying inside it
+    col = parallel & (np.abs(_cross(r, qp)) <= tol * np.maximum(la, 1e-300))
+    if col.any():
+        for seg_idx, other_idx, base, dirv, length in (
+            (i[col], j[col], p[col], r[col], la[col]),
+            (j[col], i[col], q[col], s[col], lb[col]),
+        ):
+            for end in (0, 1):
+                v = edges[other_idx, end]
+                d = np.einsum("ij,ij->i", verts[v] - base, dirv) / np.maximum(length, 1e-300)
+                off = np.abs(_cross(dirv, verts[v] - base)) / np.maximum(length, 1e-300)
+                inside = (d > tol) & (d < length - tol) & (off <= tol)
+                rec_e.append(seg_idx[inside])
+                rec_d.append(d[inside])
+                rec_v.append(v[inside])
+    if not rec_e:
+        z = np.zeros(0, np.int64)
+        return z, np.zeros(0), z, np.zeros((0, 2))
+    return (
+        np.concatenate(rec_e).astype(np.int64),
+        np.concatenate(rec_d),
+        np.concatenate(rec_v).astype(np.int64),
+        np.concatenate(new_pts) if new_pts else np.zeros((0, 2)),
+    )
+
+
+def _apply_splits(
+    verts: np.ndarray, edges: np.ndarray, rec: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Split edges at the records; returns (vertices, new edges, index of the original edge for each new edge)."""
+    rec_e, rec_d, rec_v, new_pts = rec
+    n = len(verts)
+    verts = np.concatenate([verts, new_pts]) if len(new_pts) else verts
+    rec_v = np.where(rec_v < 0, n + (-1 - rec_v), rec_v)
+    m = len(edges)
+    stop_e = np.concatenate([np.arange(m), rec_e, np.arange(m)])
+    stop_d = np.concatenate([np.full(m, -np.inf), rec_d, np.full(m, np.inf)])
+    stop_v = np.concatenate([edges[:, 0], rec_v, edges[:, 1]])
+    order = np.lexsort((stop_d, stop_e))
+    stop_e, stop_v = stop_e[order], stop_v[order]
+    same = stop_e[1:] == stop_e[:-1]
+    new_edges = np.column_stack([stop_v[:-1][same], stop_v[1:][same]])
+    return verts, new_edges, stop_e[:-1][same]
+
+
+def _inside_border(points: np.ndarray, border_a: np.ndarray, border_b: np.ndarray) -> np.ndarray:
+    """Even-odd test of points against the closed border polygon(s) given as segments (chunked, vectorised)."""
+    out = np.zeros(len(points), dtype=bool)
+    chunk = max(1, 2_000_000 // max(len(border_a), 1))
+    ay, by = border_a[:, 1], border_b[:, 1]
+    ax, bx = border_a[:, 0], border_b[:, 0]
+    for s in range(0, len(points), chunk):
+        px = points[s : s + chunk, 0:1]
+        py = points[s : s + chunk, 1:2]
+        straddle = (ay > py) != (by > py)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = ax + (py - ay) * (bx - ax) / (by - ay)
+        out[s : s + chunk] = (np.count_nonzero(straddle & (px < xc), axis=1) % 2) == 1
+    return out
+
+
+def _describe_sources(sources: list[str], idx: np.ndarray, limit: int = 4) -> str:
+    names = [sources[k] for k in dict.fromkeys(idx.tolist())]
+    return ", ".join(names[:limit]) + (f" and {len(names) - limit} more" if len(names) > limit else "")
+
+
+# ---------------------------------------------------------------------------------------------------- main
+
+
+def sheet_size(curves: list[CreaseCurve]) -> float:
+    """Largest extent (mm) of the border's bounding box, or of all curves' if there is no border."""
+    chosen = [c for c in curves if c.assignment == "B"] or curves
+    pts = [s.evaluate(np.linspace(0.0, 1.0, 33)) for c in chosen for s in c.segments]
+    if not pts:
+        raise PatternError("crease pattern: no segments to discretise")
+    allp = np.concatenate(pts)
+    return float(np.max(allp.max(axis=0) - allp.min(axis=0)))
+
+
+def discretize(
+    curves: list[CreaseCurve],
+    *,
+    interval: float | None = None,
+    tolerance: float | None = None,
+    merge_tolerance: float | None = None,
+) -> CreasePattern:
+    """Discretise crease curves into a planar :class:`CreasePattern` (paper §3.1; see the module docstring).
+
+    ``None`` parameters take the scale-aware defaults (:func:`default_parameters` of :func:`sheet_size`). The
+    result's ``sources`` has one entry per curve (``edge_polyline`` indexes it), ``edge_from_curve`` marks pieces
+    of non-straight segments, and ``warnings`` lists capped parameters, duplicate segments with different
+    assignments, removed outside pieces and open borders.
+    """
+    if not curves:
+        raise PatternError("crease pattern: no curves to discretise")
+    for c in curves:
+        for seg in c.segments:
+            if not np.all(np.isfinite(seg.points)):
+                raise PatternError(f"{c.source or 'curve'}: non-finite coordinate in a {seg.kind} segment")
+    d_int, d_tol, d_merge = default_parameters(sheet_size(curves) or 1.0)
+    interval = d_int if interval is None else float(interval)
+    tolerance = d_tol if tolerance is None else float(tolerance)
+    merge_tolerance = d_merge if merge_tolerance is None else float(merge_tolerance)
+    for name, value in (("interval", interval), ("tolerance", tolerance)):
+        if not (value > 0 and math.isfinite(value)):
+            raise PatternError(f"discretisation: {name} must be a positive number of mm, got {value!r}")
+    if not (merge_tolerance >= 0 and math.isfinite(merge_tolerance)):
+        raise PatternError(f"discretisation: merge tolerance must be ≥ 0 mm, got {merge_tolerance!r}")
+    warnings: list[str] = []
+    sources = [c.source or f"curve {k}" for k, c in enumerate(curves)]
+
+    # -- explosion guard: estimate the count first, enlarge the parameters if needed
+    estimate = 0.0
+    for c in curves:
+        for seg in c.segments:
+            if not seg.is_straight:
+                estimate += _estimate_pieces(seg, interval, tolerance)
+            elif c.assignment == "B":
+                estimate += max(1.0, _segment_length(seg) / interval)
+            else:
+                estimate += 1.0
+    if estimate > MAX_SEGMENTS:
+        f = estimate / MAX_SEGMENTS
+        old_i, old_t = interval, tolerance
+        interval, tolerance = interval * f, tolerance * f * f
+        warnings.append(
+            f"discretisation capped: interval {old_i:g} mm and tolerance {old_t:g} mm would give about "
+            f"{int(estimate)} segments (limit {MAX_SEGMENTS}); used interval {interval:.4g} mm and tolerance "
+            f"{tolerance:.4g} mm"
+        )
+
+    # -- polylines, borders first (they win merges and duplicates)
+    order = sorted(range(len(curves)), key=lambda k: PRIORITY.get(curves[k].assignment, 5))
+    seg_a, seg_b, polyline, from_curve = [], [], [], []
+    total = 0
+    hit_budget = False
+    for k in order:
+        c = curves[k]
+        if c.assignment not in PRIORITY:
+            raise PatternError(f"{sources[k]}: unknown assignment {c.assignment!r}")
+        for seg in c.segments:
+            budget = max(2, MAX_SEGMENTS - total)
+            pts, curved = _segment_polyline(seg, c.assignment, interval, tolerance, budget)
+            n = len(pts) - 1
+            if curved and n >= budget:
+                hit_budget = True
+            seg_a.append(pts[:-1])
+            seg_b.append(pts[1:])
+            polyline.append(np.full(n, k))
+            from_curve.append(np.full(n, curved))
+            total += n
+    if hit_budget:
+        warnings.append(
+            f"discretisation stopped refining at {MAX_SEGMENTS} segments: tolerance {tolerance:g} mm was not "
+            "reached on every curve; pass a larger --tolerance"
+        )
+    a = np.concatenate(seg_a)
+    b = np.concatenate(seg_b)
+    edge_poly = np.concatenate(polyline).astype(np.int64)
+    edge_curve = np.concatenate(from_curve).astype(bool)
+    assign = np.array([curves[k].assignment for k in edge_poly.tolist()], dtype="<U1")
+    angle = np.array(
+        [np.nan if curves[k].fold_angle is None else float(curves[k].fold_angle) for k in edge_poly.tolist()]
+    )
+
+    # -- planar arrangement
+    verts, idx = _merge_points(np.concatenate([a, b]), merge_tolerance)
+    m = len(a)
+    edges = np.column_stack([idx[:m], idx[m:]])
+    attrs = np.arange(m)  # index into the per-segment attribute arrays
+    for _ in range(4):
+        keep = edges[:, 0] != edges[:, 1]
+        edges, attrs = edges[keep], attrs[keep]
+        rec = _split_records(verts, edges, merge_tolerance)
+        if len(rec[0]) == 0:
+            break
+        verts, edges, parent = _apply_splits(verts, edges, rec)
+        attrs = attrs[parent]
+        verts, idx = _merge_points(verts, merge_tolerance)
+        edges = idx[edges]
+    keep = edges[:, 0] != edges[:, 1]
+    edges, attrs = edges[keep], attrs[keep]
+
+    # -- duplicates: keep the highest-priority assignment, warn when they disagree
+    key = np.sort(edges, axis=1)
+    prio = np.array([PRIORITY[x] for x in assign[attrs].tolist()], dtype=np.int64)
+    o = np.lexsort((np.arange(len(edges)), prio, key[:, 1], key[:, 0]))
+    first = np.r_[True, np.any(key[o][1:] != key[o][:-1], axis=1)]
+    winners = o[first]
+    group = np.cumsum(first) - 1
+    dup = o[~first]
+    if len(dup):
+        win_of_dup = winners[group[~first]]
+        wa, da_ = attrs[win_of_dup], attrs[dup]
+        differ = assign[wa] != assign[da_]
+        angle_differ = ~differ & ~np.isclose(angle[wa], angle[da_], equal_nan=True)
+        if differ.any():
+            pairs = sorted(
+                {
+                    (sources[edge_poly[x]], assign[x], sources[edge_poly[y]], assign[y])
+                    for x, y in zip(wa[differ].tolist(), da_[differ].tolist(), strict=True)
+                }
+            )
+            shown = "; ".join(f"kept {s1} ({a1}) over {s2} ({a2})" for s1, a1, s2, a2 in pairs[:5])
+            more = f"; and {len(pairs) - 5} more" if len(pairs) > 5 else ""
+            warnings.append(
+                f"{int(differ.sum())} duplicate segment(s) with different assignments (border > cut > "
+                f"mountain/valley > undriven > facet): {shown}{more}"
+            )
+        if angle_differ.any():
+            x, y = wa[angle_differ][0], da_[angle_differ][0]
+            warnings.append(
+                f"{int(angle_differ.sum())} duplicate segment(s) with different fold angles: kept "
+                f"{sources[edge_poly[x]]} ({angle[x]:g}°) over {sources[edge_poly[y]]} ({angle[y]:g}°), ..."
+            )
+    winners = np.sort(winners)
+    edges, attrs = edges[winners], attrs[winners]
+
+    # -- crease pieces outside a closed border
+    is_b = assign[attrs] == "B"
+    if is_b.any():
+        deg = np.bincount(edges[is_b].ravel(), minlength=len(verts))
+        open_v = np.flatnonzero(deg % 2 == 1)
+        if len(open_v):
+            pts = ", ".join(f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in open_v[:4])
+            warnings.append(f"the border is not closed: {len(open_v)} loose end(s) at {pts} mm")
+        else:
+            others = np.flatnonzero(~is_b)
+            mid = 0.5 * (verts[edges[others, 0]] + verts[edges[others, 1]])
+            inside = _inside_border(mid, verts[edges[is_b, 0]], verts[edges[is_b, 1]])
+            outside = others[~inside]
+            if len(outside):
+                warnings.append(
+                    f"removed {len(outside)} crease segment(s) outside the border, from "
+                    f"{_describe_sources(sources, edge_poly[attrs[outside]])}"
+                )
+                keep = np.ones(len(edges), bool)
+                keep[outside] = False
+                edges, attrs = edges[keep], attrs[keep]
+
+    # -- drop stray vertices, renumber
+    used = np.unique(edges)
+    remap = np.full(len(verts), -1, np.int64)
+    remap[used] = np.arange(len(used))
+    pattern = CreasePattern(
+        vertices=verts[used],
+        edges=remap[edges],
+        assignments=assign[attrs],
+        fold_angles=angle[attrs],
+        edge_polyline=edge_poly[attrs],
+        edge_from_curve=edge_curve[attrs],
+        sources=sources,
+        warnings=warnings,
+    )
+    pattern.validate()
+    return pattern

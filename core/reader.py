@@ -1,0 +1,80 @@
+"""Read a crease pattern from any supported file: SVG, FOLD or a .blend file's crease curves.
+
+:func:`read_pattern` dispatches on the suffix and always returns a discretised :class:`~.pattern.CreasePattern`;
+:func:`read_curves` returns the exact :class:`~.pattern.CreaseCurve` objects (for the Import operator, which turns
+them into Blender curves). Reading a .blend file needs Blender's ``bpy`` and is delegated lazily to
+``scene.curves.read_blend_file`` so this module never imports bpy itself.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from .discretize import discretize
+from .pattern import CreaseCurve, CreasePattern, PatternError
+
+SUFFIXES = (".svg", ".fold", ".blend")
+
+
+def _blend_curves(path: Path) -> list[CreaseCurve]:
+    try:
+        from ..scene.curves import read_blend_file
+    except ImportError as exc:
+        raise PatternError(
+            f"{path.name}: reading .blend files needs Blender (bpy) and the add-on's scene.curves module: {exc}"
+        ) from None
+    curves = read_blend_file(str(path))
+    if not curves:
+        raise PatternError(f"{path.name}: no crease curves found in the .blend file")
+    return curves
+
+
+def _suffix(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix not in SUFFIXES:
+        raise PatternError(
+            f"{path.name}: unknown file type {path.suffix or '(no suffix)'!r}; expected one of {', '.join(SUFFIXES)}"
+        )
+    if not path.is_file():
+        raise PatternError(f"{path}: no such file")
+    return suffix
+
+
+def read_curves(path: str | os.PathLike[str]) -> tuple[list[CreaseCurve], list[str]]:
+    """The exact crease curves of an .svg or .blend file, and the warnings met reading them."""
+    p = Path(path)
+    suffix = _suffix(p)
+    if suffix == ".svg":
+        from .svg import read_svg
+
+        drawing = read_svg(p)
+        return drawing.curves, list(drawing.warnings)
+    if suffix == ".blend":
+        return _blend_curves(p), []
+    raise PatternError(f"{p.name}: a FOLD file holds straight segments only, not curves; use read_pattern")
+
+
+def read_pattern(
+    path: str | os.PathLike[str],
+    *,
+    interval: float | None = None,
+    tolerance: float | None = None,
+    merge_tolerance: float | None = None,
+) -> CreasePattern:
+    """Read and discretise a crease pattern (.svg, .blend) or read a discretised one (.fold).
+
+    Discretisation parameters are in mm; ``None`` means the scale-aware defaults (see ``core.discretize``).
+    They are ignored for FOLD files, which are already straight segments. Warnings from reading come first in
+    the pattern's ``warnings``.
+    """
+    p = Path(path)
+    suffix = _suffix(p)
+    if suffix == ".fold":
+        from .fold_format import fold_to_pattern, read_fold
+
+        return fold_to_pattern(read_fold(p))
+    curves, warnings = read_curves(p)
+    pattern = discretize(curves, interval=interval, tolerance=tolerance, merge_tolerance=merge_tolerance)
+    pattern.warnings = warnings + pattern.warnings
+    return pattern

@@ -1,0 +1,922 @@
+"""Read crease patterns drawn in Origami Simulator's SVG convention (origami-simulator-model.md §5.1, §5.4, §6).
+
+Blender's own SVG importer drops stroke colours, so the file is parsed here with :mod:`xml.parsers.expat`, keeping
+the source line of every element for messages (``SVG <path id='p3'> (line 12)``).
+
+What is read:
+
+* elements ``path`` (every command M L H V C S Q T A Z, absolute and relative, implicit repeats, smooth-control
+  reflection, several sub-paths), ``line``, ``polyline``, ``polygon``, ``rect`` (rounded corners become arcs),
+  ``circle`` and ``ellipse``; contents of ``defs``/``symbol``/``clipPath``/``mask``/``metadata``/... are skipped;
+* nested ``transform`` lists (``matrix translate scale rotate skewX skewY``), applied innermost first;
+* the stroke colour, which gives the assignment by EXACT match with Origami Simulator's table (any CSS spelling of
+  those rgb values); ``opacity × stroke-opacity × 180°`` gives the fold angle (mountain negative);
+* presentation attributes < ``<style>`` rules (type, ``.class``, ``#id`` selectors, comma lists) < inline ``style``;
+  ``stroke``/``stroke-opacity`` inherit from ancestors, ``opacity`` is the element's own;
+* units: ``viewBox`` with ``width``/``height`` in physical units give the user unit → mm scale; otherwise one user
+  unit is one CSS px = 25.4/96 mm. Points are then mapped (x, y) → (x, −y) so the sheet is y-up in mm.
+
+Each sub-path (or element) becomes one :class:`~.pattern.CreaseCurve` of exact segments: quadratic Béziers are
+degree-elevated to cubics, elliptical arcs stay arcs (an affine image of an ellipse is recomputed exactly).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.parsers.expat
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .pattern import CreaseCurve, CurveSegment, PatternError
+
+PX_MM = 25.4 / 96.0
+"""Millimetres per CSS pixel (one SVG user unit when the file gives no physical size)."""
+
+UNIT_MM = {
+    "": PX_MM,
+    "px": PX_MM,
+    "mm": 1.0,
+    "cm": 10.0,
+    "in": 25.4,
+    "pt": 25.4 / 72.0,
+    "pc": 25.4 / 6.0,
+    "q": 0.25,
+}
+"""Millimetres per unit for every length unit SVG allows on ``width``/``height``."""
+
+ASSIGNMENT_RGB = {
+    (0, 0, 0): "B",
+    (255, 0, 0): "M",
+    (0, 0, 255): "V",
+    (0, 255, 0): "C",
+    (255, 255, 0): "F",
+    (255, 0, 255): "U",
+}
+"""Origami Simulator's exact stroke colours (§5.1) → FOLD assignment."""
+
+NAMED_COLOURS = {
+    "black": (0, 0, 0),
+    "red": (255, 0, 0),
+    "blue": (0, 0, 255),
+    "lime": (0, 255, 0),
+    "yellow": (255, 255, 0),
+    "magenta": (255, 0, 255),
+    "fuchsia": (255, 0, 255),
+    "white": (255, 255, 255),
+    "gray": (128, 128, 128),
+    "grey": (128, 128, 128),
+    "silver": (192, 192, 192),
+    "maroon": (128, 0, 0),
+    "navy": (0, 0, 128),
+    "purple": (128, 0, 128),
+    "olive": (128, 128, 0),
+    "teal": (0, 128, 128),
+    "aqua": (0, 255, 255),
+    "cyan": (0, 255, 255),
+    "orange": (255, 165, 0),
+}
+"""CSS colour keywords that matter here (the six of the table, and common ones so warnings stay readable)."""
+
+LITERAL_ASSIGNMENTS = {"green": "C"}
+"""Spellings Origami Simulator's table accepts literally although CSS maps them elsewhere (``green`` is 0,128,0)."""
+
+SKIPPED_CONTAINERS = {
+    "defs",
+    "symbol",
+    "clipPath",
+    "mask",
+    "metadata",
+    "title",
+    "desc",
+    "pattern",
+    "marker",
+    "linearGradient",
+    "radialGradient",
+    "filter",
+    "style",
+    "script",
+    "text",
+    "foreignObject",
+    "namedview",
+}
+"""Elements whose contents never draw creases."""
+
+SHAPES = {"path", "line", "polyline", "polygon", "rect", "circle", "ellipse"}
+INHERITED = ("stroke", "stroke-opacity", "display", "visibility")
+
+
+@dataclass
+class SvgDrawing:
+    """What :func:`read_svg` found: one crease curve per element/sub-path with a known colour, in mm (y up).
+
+    ``width_mm``/``height_mm`` are the drawing's viewport size; ``warnings`` lists what was skipped and why.
+    """
+
+    curves: list[CreaseCurve]
+    warnings: list[str] = field(default_factory=list)
+    width_mm: float = 0.0
+    height_mm: float = 0.0
+    source_name: str = ""
+
+
+# ----------------------------------------------------------------------------------------------------- XML tree
+
+
+@dataclass
+class _Element:
+    tag: str
+    attrib: dict[str, str]
+    line: int
+    children: list[_Element] = field(default_factory=list)
+    text: str = ""
+
+
+def _local(name: str) -> tuple[str, bool]:
+    """Local part of an expat ``uri}local`` name, and whether it was namespaced."""
+    if "}" in name:
+        return name.rsplit("}", 1)[1], True
+    return name, False
+
+
+def _parse_xml(text: str | bytes, source_name: str) -> _Element:
+    """Parse XML into a light tree that remembers the line number of every start tag."""
+    parser = xml.parsers.expat.ParserCreate(namespace_separator="}")
+    stack: list[_Element] = []
+    root: list[_Element] = []
+
+    def start(name: str, attrs: dict[str, str]) -> None:
+        tag, _ = _local(name)
+        attrib = {}
+        for key, value in attrs.items():
+            local, namespaced = _local(key)
+            attrib[key if namespaced else local] = value
+        if name.startswith("http://www.w3.org/2000/svg}") or "}" not in name:
+            elem = _Element(tag, attrib, parser.CurrentLineNumber)
+        else:  # foreign namespace (sodipodi:namedview, rdf, ...): keep it out of the drawing
+            elem = _Element("#foreign:" + tag, attrib, parser.CurrentLineNumber)
+        if stack:
+            stack[-1].children.append(elem)
+        else:
+            root.append(elem)
+        stack.append(elem)
+
+    def end(name: str) -> None:
+        stack.pop()
+
+    def chars(data: str) -> None:
+        if stack:
+            stack[-1].text += data
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    parser.CharacterDataHandler = chars
+    try:
+        parser.Parse(text, True)
+    except xml.parsers.expat.ExpatError as exc:
+        raise PatternError(
+            f"{source_name}: malformed XML at line {exc.lineno}, column {exc.offset + 1}: "
+            f"{xml.parsers.expat.ErrorString(exc.code)}"
+        ) from None
+    if not root:
+        raise PatternError(f"{source_name}: no XML element found")
+    return root[0]
+
+
+# ----------------------------------------------------------------------------------------------------- CSS
+
+
+_COMMENT = re.compile(r"/\*.*?\*/", re.S)
+_SIMPLE_SELECTOR = re.compile(r"^(?P<type>[A-Za-z][\w-]*|\*)?(?P<rest>(?:[.#][\w-]+)*)$")
+
+
+@dataclass
+class _Rule:
+    type: str | None
+    classes: tuple[str, ...]
+    ident: str | None
+    specificity: tuple[int, int, int]
+    order: int
+    declarations: dict[str, str]
+
+
+def _parse_declarations(text: str) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for part in text.split(";"):
+        if ":" in part:
+            key, value = part.split(":", 1)
+            value = value.replace("!important", "").strip()
+            out[key.strip().lower()] = value
+    return out
+
+
+def _parse_stylesheet(text: str, warnings: list[str], where: str) -> list[_Rule]:
+    """Rules of a ``<style>`` sheet; selectors other than simple ``type.class#id`` ones are skipped with a warning."""
+    rules: list[_Rule] = []
+    text = _COMMENT.sub("", text).replace("<![CDATA[", "").replace("]]>", "")
+    skipped: list[str] = []
+    for match in re.finditer(r"([^{}]+)\{([^}]*)\}", text):
+        selectors, body = match.group(1), match.group(2)
+        if selectors.strip().startswith("@"):
+            continue
+        decls = _parse_declarations(body)
+        for sel in selectors.split(","):
+            sel = sel.strip()
+            m = _SIMPLE_SELECTOR.match(sel)
+            if not sel or not m:
+                skipped.append(sel)
+                continue
+            type_ = m.group("type")
+            rest = m.group("rest")
+            classes = tuple(re.findall(r"\.([\w-]+)", rest))
+            ids = re.findall(r"#([\w-]+)", rest)
+            spec = (len(ids), len(classes), 1 if type_ and type_ != "*" else 0)
+            rules.append(
+                _Rule(
+                    None if type_ in (None, "*") else type_,
+                    classes,
+                    ids[0] if ids else None,
+                    spec,
+                    len(rules),
+                    decls,
+                )
+            )
+    if skipped:
+        warnings.append(f"{where}: CSS selectors not supported (rules ignored): {', '.join(sorted(set(skipped)))}")
+    return rules
+
+
+def _matches(rule: _Rule, elem: _Element) -> bool:
+    if rule.type is not None and rule.type != elem.tag:
+        return False
+    if rule.ident is not None and elem.attrib.get("id") != rule.ident:
+        return False
+    if rule.classes:
+        have = set(elem.attrib.get("class", "").split())
+        if not set(rule.classes) <= have:
+            return False
+    return True
+
+
+def _own_style(elem: _Element, rules: list[_Rule]) -> dict[str, str]:
+    """The element's own declared properties: attributes < matching CSS rules (by specificity, order) < ``style``."""
+    props: dict[str, str] = {}
+    for key in ("stroke", "stroke-opacity", "opacity", "display", "visibility"):
+        if key in elem.attrib:
+            props[key] = elem.attrib[key].strip()
+    for rule in sorted((r for r in rules if _matches(r, elem)), key=lambda r: (r.specificity, r.order)):
+        props.update(rule.declarations)
+    if "style" in elem.attrib:
+        props.update(_parse_declarations(elem.attrib["style"]))
+    return props
+
+
+# ----------------------------------------------------------------------------------------------------- colours
+
+
+def _parse_colour(value: str) -> tuple[int, int, int] | None:
+    """An sRGB triple for a CSS colour spelling (hex, keyword, ``rgb()`` with numbers or percentages), else None."""
+    v = value.lower().replace(" ", "")
+    if v in NAMED_COLOURS:
+        return NAMED_COLOURS[v]
+    if v.startswith("#"):
+        h = v[1:]
+        if len(h) in (3, 4) and all(c in "0123456789abcdef" for c in h):
+            if len(h) == 4 and h[3] != "f":
+                return None
+            return tuple(int(c * 2, 16) for c in h[:3])  # type: ignore[return-value]
+        if len(h) in (6, 8) and all(c in "0123456789abcdef" for c in h):
+            if len(h) == 8 and h[6:] != "ff":
+                return None
+            return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16))
+        return None
+    m = re.fullmatch(r"rgba?\(([^)]*)\)", v)
+    if m:
+        parts = m.group(1).split(",")
+        if len(parts) not in (3, 4):
+            return None
+        if len(parts) == 4:
+            try:
+                alpha = float(parts[3][:-1]) / 100 if parts[3].endswith("%") else float(parts[3])
+            except ValueError:
+                return None
+            if alpha != 1.0:
+                return None
+        rgb = []
+        for p in parts[:3]:
+            try:
+                x = float(p[:-1]) * 2.55 if p.endswith("%") else float(p)
+            except ValueError:
+                return None
+            if abs(x - round(x)) > 1e-6:
+                return None
+            rgb.append(int(round(x)))
+        return tuple(rgb)  # type: ignore[return-value]
+    return None
+
+
+def stroke_assignment(value: str | None) -> str | None:
+    """FOLD assignment for a stroke value by Origami Simulator's exact colour table, or None if it is not one."""
+    if value is None:
+        return None
+    v = value.strip().lower().replace(" ", "")
+    if v in LITERAL_ASSIGNMENTS:
+        return LITERAL_ASSIGNMENTS[v]
+    rgb = _parse_colour(v)
+    return ASSIGNMENT_RGB.get(rgb) if rgb is not None else None
+
+
+def _parse_opacity(value: str | None, what: str, where: str) -> float:
+    if value is None or value.strip() == "":
+        return 1.0
+    v = value.strip()
+    try:
+        x = float(v[:-1]) / 100.0 if v.endswith("%") else float(v)
+    except ValueError:
+        raise PatternError(f"{where}: {what} {value!r} is not a number") from None
+    if not math.isfinite(x):
+        raise PatternError(f"{where}: {what} {value!r} is not finite")
+    return min(max(x, 0.0), 1.0)
+
+
+# ----------------------------------------------------------------------------------------------------- transforms
+
+
+_TRANSFORM = re.compile(r"\s*(matrix|translate|scale|rotate|skewX|skewY)\s*\(([^)]*)\)\s*,?", re.I)
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def parse_transform(value: str, where: str = "transform") -> np.ndarray:
+    """3×3 affine matrix of an SVG ``transform`` list (the leftmost transform is applied last)."""
+    m = np.eye(3)
+    pos = 0
+    value = value.strip()
+    while pos < len(value):
+        match = _TRANSFORM.match(value, pos)
+        if not match:
+            raise PatternError(f"{where}: cannot read transform {value!r} at {value[pos : pos + 20]!r}")
+        name = match.group(1).lower()
+        args = [float(x) for x in _NUMBER.findall(match.group(2))]
+        t = np.eye(3)
+        n = len(args)
+        if name == "matrix" and n == 6:
+            a, b, c, d, e, f = args
+            t[:2] = [[a, c, e], [b, d, f]]
+        elif name == "translate" and n in (1, 2):
+            t[0, 2] = args[0]
+            t[1, 2] = args[1] if n == 2 else 0.0
+        elif name == "scale" and n in (1, 2):
+            t[0, 0] = args[0]
+            t[1, 1] = args[1] if n == 2 else args[0]
+        elif name == "rotate" and n in (1, 3):
+            ang = math.radians(args[0])
+            c, s = math.cos(ang), math.sin(ang)
+            r = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            if n == 3:
+                cx, cy = args[1], args[2]
+                tr = np.array([[1, 0, cx], [0, 1, cy], [0, 0, 1.0]])
+                back = np.array([[1, 0, -cx], [0, 1, -cy], [0, 0, 1.0]])
+                r = tr @ r @ back
+            t = r
+        elif name == "skewx" and n == 1:
+            t[0, 1] = math.tan(math.radians(args[0]))
+        elif name == "skewy" and n == 1:
+            t[1, 0] = math.tan(math.radians(args[0]))
+        else:
+            raise PatternError(f"{where}: {match.group(1)}() with {n} argument(s) in transform {value!r}")
+        m = m @ t
+        pos = match.end()
+    return m
+
+
+# ----------------------------------------------------------------------------------------------------- path data
+
+
+class _PathScanner:
+    """Reads numbers, arc flags and command letters from SVG path data, remembering positions for messages."""
+
+    def __init__(self, d: str, where: str) -> None:
+        self.d = d
+        self.pos = 0
+        self.where = where
+
+    def _skip(self) -> None:
+        d, n = self.d, len(self.d)
+        while self.pos < n and (d[self.pos] in " \t\r\n\f,"):
+            self.pos += 1
+
+    def at_end(self) -> bool:
+        self._skip()
+        return self.pos >= len(self.d)
+
+    def peek_command(self) -> str | None:
+        self._skip()
+        if self.pos < len(self.d) and self.d[self.pos].isalpha() and self.d[self.pos] not in "eE":
+            return self.d[self.pos]
+        return None
+
+    def token(self) -> str:
+        self._skip()
+        m = re.match(r"\S{1,12}", self.d[self.pos :])
+        return m.group(0) if m else "end of data"
+
+    def fail(self, what: str) -> PatternError:
+        return PatternError(f"{self.where}: bad path data: {what} at {self.token()!r} (character {self.pos + 1})")
+
+    def number(self) -> float:
+        self._skip()
+        m = _NUMBER.match(self.d, self.pos)
+        if not m:
+            raise self.fail("expected a number")
+        self.pos = m.end()
+        x = float(m.group(0))
+        if not math.isfinite(x):
+            raise self.fail("number out of range")
+        return x
+
+    def flag(self) -> bool:
+        self._skip()
+        if self.pos < len(self.d) and self.d[self.pos] in "01":
+            self.pos += 1
+            return self.d[self.pos - 1] == "1"
+        raise self.fail("expected an arc flag 0 or 1")
+
+    def has_number(self) -> bool:
+        self._skip()
+        return bool(_NUMBER.match(self.d, self.pos))
+
+
+# A raw segment in user units, before the element's transform: ("line", p0, p1), ("cubic", p0, c1, c2, p3),
+# ("arc", p0, p1, (cx, cy, rx, ry, phi, theta0, dtheta)).
+_Raw = tuple
+
+
+def _arc_centre(
+    p0: np.ndarray, rx: float, ry: float, phi_deg: float, large: bool, sweep: bool, p1: np.ndarray
+) -> tuple[float, float, float, float, float, float, float] | None:
+    """SVG endpoint → centre parametrisation (SVG 1.1 F.6.5) with radii scaled up when too small (F.6.6).
+
+    Returns ``(cx, cy, rx, ry, phi, theta0, dtheta)`` in radians, or None when the arc is a straight line
+    (a zero radius); identical endpoints must be filtered by the caller.
+    """
+    rx, ry = abs(rx), abs(ry)
+    if rx == 0.0 or ry == 0.0:
+        return None
+    phi = math.radians(phi_deg % 360.0)
+    c, s = math.cos(phi), math.sin(phi)
+    dx, dy = (p0[0] - p1[0]) / 2.0, (p0[1] - p1[1]) / 2.0
+    x1p, y1p = c * dx + s * dy, -s * dx + c * dy
+    lam = (x1p / rx) ** 2 + (y1p / ry) ** 2
+    if lam > 1.0:
+        k = math.sqrt(lam)
+        rx, ry = rx * k, ry * k
+    num = rx * rx * ry * ry - rx * rx * y1p * y1p - ry * ry * x1p * x1p
+    den = rx * rx * y1p * y1p + ry * ry * x1p * x1p
+    coef = math.sqrt(max(num, 0.0) / den) if den > 0 else 0.0
+    if large == sweep:
+        coef = -coef
+    cxp, cyp = coef * rx * y1p / ry, -coef * ry * x1p / rx
+    cx = c * cxp - s * cyp + (p0[0] + p1[0]) / 2.0
+    cy = s * cxp + c * cyp + (p0[1] + p1[1]) / 2.0
+    theta0 = math.atan2((y1p - cyp) / ry, (x1p - cxp) / rx)
+    theta1 = math.atan2((-y1p - cyp) / ry, (-x1p - cxp) / rx)
+    dtheta = theta1 - theta0
+    if sweep and dtheta <= 0:
+        dtheta += 2 * math.pi
+    elif not sweep and dtheta >= 0:
+        dtheta -= 2 * math.pi
+    return (cx, cy, rx, ry, phi, theta0, dtheta)
+
+
+def parse_path_data(d: str, where: str) -> list[tuple[list[_Raw], bool]]:
+    """Sub-paths of SVG path data as (raw segments in user units, closed) pairs.
+
+    Handles every command, absolute and relative, implicit repeats (extra pairs after M are L), smooth control
+    point reflection for S/T, and Z returning to the sub-path start. Errors name the offending token.
+    """
+    sc = _PathScanner(d, where)
+    subpaths: list[tuple[list[_Raw], bool]] = []
+    segs: list[_Raw] = []
+    closed = False
+    cur = np.zeros(2)
+    start = np.zeros(2)
+    last_cubic_ctrl: np.ndarray | None = None
+    last_quad_ctrl: np.ndarray | None = None
+    cmd: str | None = None
+    first = True
+
+    def flush() -> None:
+        nonlocal segs, closed
+        if segs:
+            subpaths.append((segs, closed))
+        segs, closed = [], False
+
+    while not sc.at_end():
+        letter = sc.peek_command()
+        if letter is not None:
+            if letter not in "MmLlHhVvCcSsQqTtAaZz":
+                raise sc.fail(f"unknown command {letter!r}")
+            sc.pos += 1
+            cmd = letter
+        elif cmd is None or cmd in "Zz":
+            raise sc.fail("expected a command letter")
+        if first and cmd not in "Mm":
+            raise sc.fail("path data must start with M or m")
+        first = False
+        rel = cmd.islower()
+        up = cmd.upper()
+        base = cur if rel else np.zeros(2)
+        if up == "Z":
+            if segs and not np.array_equal(cur, start):
+                segs.append(("line", cur.copy(), start.copy()))
+            if segs:
+                closed = True
+                flush()
+            cur = start.copy()
+            last_cubic_ctrl = last_quad_ctrl = None
+            continue
+        if up == "M":
+            flush()
+            p = base + (sc.number(), sc.number())
+            cur = p
+            start = p.copy()
+            cmd = "l" if rel else "L"  # implicit repeats are line-tos
+            last_cubic_ctrl = last_quad_ctrl = None
+            if not sc.has_number():
+                continue
+            # fall through to read the implicit lineto on the next loop turn
+            continue
+        if up == "L":
+            p = base + (sc.number(), sc.number())
+            segs.append(("line", cur.copy(), p))
+            cur = p
+            last_cubic_ctrl = last_quad_ctrl = None
+        elif up == "H":
+            x = sc.number() + (cur[0] if rel else 0.0)
+            p = np.array([x, cur[1]])
+            segs.append(("line", cur.copy(), p))
+            cur = p
+            last_cubic_ctrl = last_quad_ctrl = None
+        elif up == "V":
+            y = sc.number() + (cur[1] if rel else 0.0)
+            p = np.array([cur[0], y])
+            segs.append(("line", cur.copy(), p))
+            cur = p
+            last_cubic_ctrl = last_quad_ctrl = None
+        elif up == "C":
+            c1 = base + (sc.number(), sc.number())
+            c2 = base + (sc.number(), sc.number())
+            p = base + (sc.number(), sc.number())
+            segs.append(("cubic", cur.copy(), c1, c2, p))
+            cur, last_cubic_ctrl, last_quad_ctrl = p, c2, None
+        elif up == "S":
+            c1 = 2 * cur - last_cubic_ctrl if last_cubic_ctrl is not None else cur.copy()
+            c2 = base + (sc.number(), sc.number())
+            p = base + (sc.number(), sc.number())
+            segs.append(("cubic", cur.copy(), c1, c2, p))
+            cur, last_cubic_ctrl, last_quad_ctrl = p, c2, None
+        elif up == "Q":
+            q = base + (sc.number(), sc.number())
+            p = base + (sc.number(), sc.number())
+            segs.append(("cubic", cur.copy(), cur + 2.0 / 3.0 * (q - cur), p + 2.0 / 3.0 * (q - p), p))
+            cur, last_quad_ctrl, last_cubic_ctrl = p, q, None
+        elif up == "T":
+            q = 2 * cur - last_quad_ctrl if last_quad_ctrl is not None else cur.copy()
+            p = base + (sc.number(), sc.number())
+            segs.append(("cubic", cur.copy(), cur + 2.0 / 3.0 * (q - cur), p + 2.0 / 3.0 * (q - p), p))
+            cur, last_quad_ctrl, last_cubic_ctrl = p, q, None
+        elif up == "A":
+            rx, ry, rot = sc.number(), sc.number(), sc.number()
+            large, sweep = sc.flag(), sc.flag()
+            p = base + (sc.number(), sc.number())
+            if not np.array_equal(p, cur):
+                arc = _arc_centre(cur, rx, ry, rot, large, sweep, p)
+                if arc is None:
+                    segs.append(("line", cur.copy(), p))
+                else:
+                    segs.append(("arc", cur.copy(), p, arc))
+            cur = p
+            last_cubic_ctrl = last_quad_ctrl = None
+    flush()
+    return subpaths
+
+
+# ----------------------------------------------------------------------------------------------------- geometry
+
+
+def _transform_points(m: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+    return pts @ m[:2, :2].T + m[:2, 2]
+
+
+def _transform_arc(
+    m: np.ndarray, arc: tuple[float, float, float, float, float, float, float]
+) -> tuple[float, float, float, float, float, float, float]:
+    """Exact affine image of the elliptical arc ``c + R(phi)·diag(rx, ry)·(cos t, sin t)``, t in the sweep.
+
+    The linear part ``A·R(phi)·diag(rx, ry)`` is decomposed by SVD into ``R(phi')·diag(s1, ±s2)·R(-psi)``; the
+    image is the ellipse with radii ``s1, |s2|`` rotated by ``phi'``, its angles shifted by ``-psi`` (and mirrored
+    when the transform flips orientation, which also reverses the sweep).
+    """
+    cx, cy, rx, ry, phi, theta0, dtheta = arc
+    a = m[:2, :2]
+    cphi, sphi = math.cos(phi), math.sin(phi)
+    lin = a @ np.array([[cphi, -sphi], [sphi, cphi]]) @ np.diag([rx, ry])
+    u, s, vt = np.linalg.svd(lin)
+    s = s.astype(float).copy()
+    if np.linalg.det(u) < 0:
+        u[:, 1] *= -1
+        s[1] = -s[1]
+    if np.linalg.det(vt) < 0:
+        vt[1, :] *= -1
+        s[1] = -s[1]
+    psi = math.atan2(vt[0, 1], vt[0, 0])
+    new_phi = math.atan2(u[1, 0], u[0, 0])
+    t0, dt = theta0 - psi, dtheta
+    if s[1] < 0:
+        t0, dt = -t0, -dt
+    centre = _transform_points(m, np.array([cx, cy]))[0]
+    return (float(centre[0]), float(centre[1]), float(s[0]), float(abs(s[1])), new_phi, t0, dt)
+
+
+def _to_segment(raw: _Raw, m: np.ndarray) -> CurveSegment:
+    kind = raw[0]
+    if kind == "line":
+        return CurveSegment("line", _transform_points(m, np.array([raw[1], raw[2]])))
+    if kind == "cubic":
+        return CurveSegment("cubic", _transform_points(m, np.array(raw[1:5])))
+    ends = _transform_points(m, np.array([raw[1], raw[2]]))
+    return CurveSegment("arc", ends, _transform_arc(m, raw[3]))
+
+
+def _attr_float(elem: _Element, name: str, where: str, default: float | None = 0.0) -> float:
+    value = elem.attrib.get(name)
+    if value is None or value.strip() == "":
+        if default is None:
+            raise PatternError(f"{where}: missing attribute {name}")
+        return default
+    m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(px)?\s*", value)
+    if not m:
+        raise PatternError(f"{where}: attribute {name}={value!r} is not a number in user units")
+    return float(m.group(1))
+
+
+def _points_attr(elem: _Element, where: str) -> np.ndarray:
+    text = elem.attrib.get("points", "")
+    nums = _NUMBER.findall(text)
+    stripped = _NUMBER.sub(" ", text).replace(",", " ").strip()
+    if stripped:
+        raise PatternError(f"{where}: bad points attribute near {stripped.split()[0]!r}")
+    if len(nums) % 2:
+        raise PatternError(f"{where}: points attribute has an odd number of coordinates ({len(nums)})")
+    return np.array([float(x) for x in nums]).reshape(-1, 2)
+
+
+def _ellipse_arcs(cx: float, cy: float, rx: float, ry: float) -> list[_Raw]:
+    """A full ellipse as two half arcs (start ≠ end on each, so no segment is degenerate)."""
+    p0, p1 = np.array([cx + rx, cy]), np.array([cx - rx, cy])
+    return [
+        ("arc", p0, p1, (cx, cy, rx, ry, 0.0, 0.0, math.pi)),
+        ("arc", p1, p0.copy(), (cx, cy, rx, ry, 0.0, math.pi, math.pi)),
+    ]
+
+
+def _shape_subpaths(elem: _Element, where: str) -> list[tuple[list[_Raw], bool]]:
+    """Raw sub-paths (user units) of one shape element."""
+    tag = elem.tag
+    if tag == "path":
+        return parse_path_data(elem.attrib.get("d", ""), where)
+    if tag == "line":
+        p0 = np.array([_attr_float(elem, "x1", where), _attr_float(elem, "y1", where)])
+        p1 = np.array([_attr_float(elem, "x2", where), _attr_float(elem, "y2", where)])
+        return [([("line", p0, p1)], False)]
+    if tag in ("polyline", "polygon"):
+        pts = _points_attr(elem, where)
+        segs: list[_Raw] = [("line", pts[i], pts[i + 1]) for i in range(len(pts) - 1)]
+        closed = tag == "polygon" and len(pts) > 2
+        if closed and not np.array_equal(pts[-1], pts[0]):
+            segs.append(("line", pts[-1], pts[0]))
+        return [(segs, closed)] if segs else []
+    if tag == "rect":
+        x, y = _attr_float(elem, "x", where), _attr_float(elem, "y", where)
+        w, h = _attr_float(elem, "width", where), _attr_float(elem, "height", where)
+        if w <= 0 or h <= 0:
+            return []
+        rx_s, ry_s = elem.attrib.get("rx"), elem.attrib.get("ry")
+        rx = _attr_float(elem, "rx", where) if rx_s not in (None, "", "auto") else None
+        ry = _attr_float(elem, "ry", where) if ry_s not in (None, "", "auto") else None
+        if rx is None and ry is None:
+            rx = ry = 0.0
+        elif rx is None:
+            rx = ry
+        elif ry is None:
+            ry = rx
+        rx, ry = min(max(rx, 0.0), w / 2), min(max(ry, 0.0), h / 2)
+        if rx == 0.0 or ry == 0.0:
+            c = np.array([[x, y], [x + w, y], [x + w, y + h], [x, y + h]])
+            return [([("line", c[i], c[(i + 1) % 4]) for i in range(4)], True)]
+        hp = math.pi / 2
+        pts = {
+            "t0": np.array([x + rx, y]),
+            "t1": np.array([x + w - rx, y]),
+            "r0": np.array([x + w, y + ry]),
+            "r1": np.array([x + w, y + h - ry]),
+            "b0": np.array([x + w - rx, y + h]),
+            "b1": np.array([x + rx, y + h]),
+            "l0": np.array([x, y + h - ry]),
+            "l1": np.array([x, y + ry]),
+        }
+        segs = []
+
+        def edge(a: str, b: str) -> None:
+            if not np.array_equal(pts[a], pts[b]):
+                segs.append(("line", pts[a], pts[b]))
+
+        edge("t0", "t1")
+        segs.append(("arc", pts["t1"], pts["r0"], (x + w - rx, y + ry, rx, ry, 0.0, -hp, hp)))
+        edge("r0", "r1")
+        segs.append(("arc", pts["r1"], pts["b0"], (x + w - rx, y + h - ry, rx, ry, 0.0, 0.0, hp)))
+        edge("b0", "b1")
+        segs.append(("arc", pts["b1"], pts["l0"], (x + rx, y + h - ry, rx, ry, 0.0, hp, hp)))
+        edge("l0", "l1")
+        segs.append(("arc", pts["l1"], pts["t0"], (x + rx, y + ry, rx, ry, 0.0, math.pi, hp)))
+        return [(segs, True)]
+    if tag == "circle":
+        r = _attr_float(elem, "r", where)
+        if r <= 0:
+            return []
+        return [(_ellipse_arcs(_attr_float(elem, "cx", where), _attr_float(elem, "cy", where), r, r), True)]
+    if tag == "ellipse":
+        rx, ry = _attr_float(elem, "rx", where), _attr_float(elem, "ry", where)
+        if rx <= 0 or ry <= 0:
+            return []
+        return [(_ellipse_arcs(_attr_float(elem, "cx", where), _attr_float(elem, "cy", where), rx, ry), True)]
+    return []
+
+
+# ----------------------------------------------------------------------------------------------------- viewport
+
+
+def _length_mm(value: str | None) -> tuple[float | None, bool]:
+    """(millimetres, has a physical unit) for a width/height value; (None, False) if absent or a percentage."""
+    if value is None:
+        return None, False
+    m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z%]*)\s*", value)
+    if not m:
+        return None, False
+    unit = m.group(2).lower()
+    if unit == "%" or unit not in UNIT_MM:
+        return None, False
+    return float(m.group(1)) * UNIT_MM[unit], unit not in ("", "px")
+
+
+def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float]:
+    """User units → mm (y up) as a 3×3 matrix, and the viewport's width and height in mm.
+
+    With a ``viewBox`` the user box is fitted into ``width × height`` following ``preserveAspectRatio`` (default
+    ``xMidYMid meet``; ``none`` scales each axis on its own). Missing ``width``/``height`` fall back to the viewBox
+    size in px. The result ends with the flip (x, y) → (x, −y).
+    """
+    w_mm, _ = _length_mm(root.attrib.get("width"))
+    h_mm, _ = _length_mm(root.attrib.get("height"))
+    vb = root.attrib.get("viewBox")
+    m = np.eye(3)
+    if vb is not None and vb.strip():
+        nums = [float(x) for x in _NUMBER.findall(vb)]
+        if len(nums) != 4 or nums[2] <= 0 or nums[3] <= 0:
+            raise PatternError(f"{where}: viewBox {vb!r} must be four numbers with positive width and height")
+        vx, vy, vw, vh = nums
+        if w_mm is None and h_mm is None:
+            w_mm, h_mm = vw * PX_MM, vh * PX_MM
+        elif w_mm is None:
+            w_mm = h_mm * vw / vh
+        elif h_mm is None:
+            h_mm = w_mm * vh / vw
+        sx, sy = w_mm / vw, h_mm / vh
+        par = root.attrib.get("preserveAspectRatio", "xMidYMid meet").split()
+        align = par[0] if par else "xMidYMid"
+        tx = ty = 0.0
+        if align != "none":
+            slice_ = len(par) > 1 and par[1] == "slice"
+            s = max(sx, sy) if slice_ else min(sx, sy)
+            fx = {"xMin": 0.0, "xMid": 0.5, "xMax": 1.0}.get(align[:4], 0.5)
+            fy = {"YMin": 0.0, "YMid": 0.5, "YMax": 1.0}.get(align[4:], 0.5)
+            tx, ty = fx * (w_mm - vw * s), fy * (h_mm - vh * s)
+            sx = sy = s
+        m = np.array([[sx, 0.0, tx - vx * sx], [0.0, sy, ty - vy * sy], [0.0, 0.0, 1.0]])
+    else:
+        m = np.diag([PX_MM, PX_MM, 1.0])
+        if w_mm is None or h_mm is None:
+            w_mm = w_mm or 0.0
+            h_mm = h_mm or 0.0
+    flip = np.diag([1.0, -1.0, 1.0])
+    return flip @ m, float(w_mm or 0.0), float(h_mm or 0.0)
+
+
+# ----------------------------------------------------------------------------------------------------- reading
+
+
+def _describe(elem: _Element, source_name: str) -> str:
+    ident = elem.attrib.get("id")
+    tag = f"<{elem.tag} id='{ident}'>" if ident else f"<{elem.tag}>"
+    prefix = f"SVG {tag}" if not source_name else f"SVG {tag}"
+    return f"{prefix} (line {elem.line})"
+
+
+def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
+    """Read an SVG document given as text; see the module docstring. ``source_name`` prefixes file-level errors."""
+    root = _parse_xml(text, source_name)
+    if root.tag != "svg":
+        raise PatternError(f"{source_name}: not an SVG file (root element is <{root.tag}>, line {root.line})")
+    warnings: list[str] = []
+    rules: list[_Rule] = []
+
+    def collect_styles(elem: _Element) -> None:
+        if elem.tag == "style":
+            rules.extend(_parse_stylesheet(elem.text, warnings, f"{source_name} <style> (line {elem.line})"))
+        for child in elem.children:
+            collect_styles(child)
+
+    collect_styles(root)
+    for i, r in enumerate(rules):
+        r.order = i
+    viewport, width_mm, height_mm = _viewport(root, source_name)
+    curves: list[CreaseCurve] = []
+    unknown: dict[str, list[int]] = {}
+    uses: list[int] = []
+
+    def visit(elem: _Element, matrix: np.ndarray, inherited: dict[str, str]) -> None:
+        if elem.tag.startswith("#foreign:") or elem.tag in SKIPPED_CONTAINERS:
+            return
+        where = _describe(elem, source_name)
+        own = _own_style(elem, rules)
+        style = dict(inherited)
+        for key in INHERITED:
+            if key in own and own[key].lower() != "inherit":
+                style[key] = own[key]
+        if own.get("display", "").lower() == "none":
+            return
+        if "transform" in elem.attrib:
+            matrix = matrix @ parse_transform(elem.attrib["transform"], where)
+        if elem.tag == "use":
+            uses.append(elem.line)
+            return
+        if elem.tag in SHAPES:
+            stroke = style.get("stroke")
+            assignment = stroke_assignment(stroke)
+            subpaths = _shape_subpaths(elem, where)
+            if not subpaths:
+                return
+            if assignment is None:
+                key = (stroke or "no stroke").strip().lower().replace(" ", "")
+                unknown.setdefault(key, []).append(elem.line)
+                return
+            opacity = _parse_opacity(own.get("opacity"), "opacity", where)
+            stroke_opacity = _parse_opacity(style.get("stroke-opacity"), "stroke-opacity", where)
+            o = opacity * stroke_opacity
+            if assignment == "M":
+                angle: float | None = -180.0 * o if o != 0.0 else None
+            elif assignment == "V":
+                angle = 180.0 * o if o != 0.0 else None
+            elif assignment == "F":
+                angle = 0.0
+            else:
+                angle = None
+            for k, (raw_segs, closed) in enumerate(subpaths):
+                source = where if len(subpaths) == 1 else f"{where} subpath {k + 1}"
+                segments = [_to_segment(r, matrix) for r in raw_segs]
+                curves.append(CreaseCurve(segments, assignment, angle, closed=closed, source=source))
+            return
+        for child in elem.children:
+            visit(child, matrix, style)
+
+    visit(root, viewport, {})
+    if unknown:
+        parts = []
+        for colour, lines in unknown.items():
+            shown = ", ".join(str(x) for x in lines[:8]) + (", ..." if len(lines) > 8 else "")
+            noun = "element" if len(lines) == 1 else "elements"
+            label = "lines" if len(lines) > 1 else "line"
+            parts.append(f"{colour} ({len(lines)} {noun}: {label} {shown})")
+        warnings.append(f"{source_name}: unknown stroke colours (elements skipped): " + ", ".join(parts))
+    if uses:
+        warnings.append(f"{source_name}: <use> elements are not followed (lines {', '.join(map(str, uses[:8]))})")
+    if not curves:
+        raise PatternError(
+            f"{source_name}: no usable crease element (path/line/polyline/polygon/rect/circle/ellipse with a stroke "
+            "colour from Origami Simulator's table: black border, red mountain, blue valley, green cut, yellow facet, "
+            "magenta undriven)"
+        )
+    return SvgDrawing(curves, warnings, width_mm, height_mm, source_name)
+
+
+def read_svg(path: str | Path) -> SvgDrawing:
+    """Read an SVG file in Origami Simulator's convention into crease curves (mm, y up). See :func:`parse_svg_text`."""
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise PatternError(f"{p}: cannot read SVG file: {exc.strerror or exc}") from None
+    return parse_svg_text(data, p.name)

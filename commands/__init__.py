@@ -7,6 +7,7 @@ import argparse
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add every subcommand's parser to ``sub``."""
-    from . import discretize
+    from . import discretize, fold
 
     discretize.register(sub)
+    fold.register(sub)

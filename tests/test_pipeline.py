@@ -1,0 +1,67 @@
+"""fold_pattern and the ``fold`` command on a real fixture (wavy_pleats.svg) and a generated pattern."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
+needs_fixtures = pytest.mark.skipif(not FIXTURES.is_dir(), reason=f"fixture folder {FIXTURES} is absent")
+
+
+@needs_fixtures
+def test_fold_pattern_report_on_simple_vertex():
+    from curved_fold.core.pipeline import fold_pattern
+    from curved_fold.core.reader import read_pattern
+
+    run = fold_pattern(read_pattern(FIXTURES / "simpleVertex.svg"), percent=0.6)
+    r = run.report
+    for key in (
+        "vertices",
+        "faces",
+        "generation_ms",
+        "simulation_ms",
+        "iterations",
+        "converged",
+        "strain_mean_pct",
+        "strain_max_pct",
+        "warp_mean_deg",
+        "fold_angle_error_mean_deg",
+        "mesh_type",
+        "solver",
+        "percent",
+        "force_evaluations",
+        "residual",
+        "warnings",
+        "does_not_fold_as_assigned",
+    ):
+        assert key in r
+    assert r["converged"] and r["faces"] == run.mesh.n_faces
+    assert np.all(np.isfinite(run.result.positions))
+    assert run.result.positions.shape == (run.mesh.n_vertices, 3)
+
+
+@needs_fixtures
+def test_cli_fold_writes_fold_and_report(tmp_path):
+    from curved_fold.cli import main
+
+    out, rep = tmp_path / "w.fold", tmp_path / "w.json"
+    code = main(
+        ["fold", str(FIXTURES / "simpleVertex.svg"), "--out", str(out), "--percent", "50", "--report", str(rep)]
+    )
+    assert code == 0
+    data = json.loads(out.read_text())
+    assert len(data["vertices_coords"]) > 0 and len(data["vertices_coords"][0]) == 3
+    report = json.loads(rep.read_text())
+    assert report["percent"] == 0.5 and report["converged"]
+
+
+def test_cli_rejects_unknown_output_suffix(tmp_path, capsys):
+    from curved_fold.cli import main
+
+    code = main(["fold", "whatever.svg", "--out", str(tmp_path / "x.stl")])
+    assert code == 2
+    assert "unknown output type" in capsys.readouterr().err

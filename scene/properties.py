@@ -61,7 +61,7 @@ def role_material(role: str) -> bpy.types.Material:
         mat = bpy.data.materials.new(name)
     colour = ROLE_COLOURS[role]
     mat.diffuse_color = colour
-    if hasattr(mat, "use_nodes") and mat.node_tree is not None:
+    if mat.node_tree is not None:  # materials made in the UI use nodes; keep their base colour in step
         bsdf = mat.node_tree.nodes.get("Principled BSDF")
         if bsdf is not None:
             bsdf.inputs["Base Color"].default_value = colour

@@ -1,0 +1,320 @@
+"""Crease curves drawn as Blender curve objects (scene/curves.py, scene/properties.py, operators/roles.py).
+
+The key check: the same Bézier creases drawn in Blender and written in an SVG discretise to the same pattern.
+Everything runs against the extension installed from its zip (fixtures ``extension`` and ``clean_scene``).
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+
+import numpy as np
+import pytest
+
+from curved_fold.core.discretize import discretize
+from curved_fold.core.pattern import CreaseCurve, CurveSegment
+from curved_fold.core.svg import parse_svg_text
+
+bpy = pytest.importorskip("bpy")
+
+# A 200 × 100 mm sheet (y up, mm). Dyadic coordinates: exact in Blender's float32 when 1 BU = 1 mm.
+BORDER = [(0.0, 0.0), (200.0, 0.0), (200.0, 100.0), (0.0, 100.0)]
+VALLEY = [  # two cubic segments: knots with (handle_left, co, handle_right)
+    ((40.0, 0.0), (50.0, 0.0), (60.0, 25.0)),
+    ((70.0, 40.0), (100.0, 50.0), (130.0, 60.0)),
+    ((140.0, 75.0), (150.0, 100.0), (160.0, 100.0)),
+]
+MOUNTAIN = [
+    ((10.0, 20.0), (20.0, 0.0), (30.5, 37.25)),
+    ((12.5, 70.0), (20.0, 100.0), (30.0, 110.0)),
+]
+
+
+@pytest.fixture
+def mod(extension):
+    """The installed copy's ``scene.curves`` module."""
+    return importlib.import_module(extension.__name__ + ".scene.curves")
+
+
+def bezier_object(name: str, knots, *, role: str, scale: float = 1.0, cyclic: bool = False, angle: float = 180.0):
+    """A curve object with one Bézier spline; ``knots`` = [(handle_left, co, handle_right)] in mm × ``scale`` BU."""
+    cu = bpy.data.curves.new(name, "CURVE")
+    cu.dimensions = "3D"
+    add_bezier_spline(cu, knots, scale=scale, cyclic=cyclic)
+    ob = bpy.data.objects.new(name, cu)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.curved_fold.fold_angle = angle
+    ob.curved_fold.role = role
+    return ob
+
+
+def add_bezier_spline(cu, knots, *, scale: float = 1.0, cyclic: bool = False, z: float = 0.0):
+    sp = cu.splines.new("BEZIER")
+    sp.bezier_points.add(len(knots) - 1)
+    for bp, (hl, co, hr) in zip(sp.bezier_points, knots, strict=True):
+        bp.handle_left_type = bp.handle_right_type = "FREE"
+        bp.co = (co[0] * scale, co[1] * scale, z)
+        bp.handle_left = (hl[0] * scale, hl[1] * scale, z)
+        bp.handle_right = (hr[0] * scale, hr[1] * scale, z)
+    sp.use_cyclic_u = cyclic
+    return sp
+
+
+def poly_object(name: str, points, *, role: str, scale: float = 1.0, cyclic: bool = True):
+    cu = bpy.data.curves.new(name, "CURVE")
+    sp = cu.splines.new("POLY")
+    sp.points.add(len(points) - 1)
+    for p, (x, y) in zip(sp.points, points, strict=True):
+        p.co = (x * scale, y * scale, 0.0, 1.0)
+    sp.use_cyclic_u = cyclic
+    ob = bpy.data.objects.new(name, cu)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.curved_fold.role = role
+    return ob
+
+
+def svg_path(knots, cyclic: bool = False) -> str:
+    """SVG path data of the same Bézier chain (SVG y = −y: the reader flips y, with this viewBox 1 unit = 1 mm)."""
+
+    def p(xy):
+        return f"{xy[0]!r},{-xy[1]!r}"
+
+    d = [f"M {p(knots[0][1])}"]
+    pairs = list(zip(knots[:-1], knots[1:], strict=True)) + ([(knots[-1], knots[0])] if cyclic else [])
+    for a, b in pairs:
+        d.append(f"C {p(a[2])} {p(b[0])} {p(b[1])}")
+    return " ".join(d) + (" Z" if cyclic else "")
+
+
+def svg_document(paths: list[tuple[str, str]]) -> str:
+    body = "\n".join(f'  <path d="{d}" fill="none" stroke="{colour}"/>' for d, colour in paths)
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="100mm" viewBox="0 0 200 100">\n{body}\n</svg>'
+    )
+
+
+def mm_per_bu_one(scene) -> None:
+    scene.unit_settings.system = "METRIC"
+    scene.unit_settings.scale_length = 0.001  # 1 BU = 1 mm: coordinates stay exact
+
+
+def assert_same_pattern(a, b, rel: float = 1e-9) -> None:
+    assert a.n_vertices == b.n_vertices and a.n_edges == b.n_edges
+    scale = max(a.size, 1.0)
+    np.testing.assert_allclose(a.vertices, b.vertices, rtol=0, atol=rel * scale)
+    np.testing.assert_array_equal(a.edges, b.edges)
+    np.testing.assert_array_equal(a.assignments, b.assignments)
+    np.testing.assert_array_equal(a.fold_angles, b.fold_angles)
+    np.testing.assert_array_equal(a.edge_from_curve, b.edge_from_curve)
+
+
+def test_blender_curves_discretise_like_the_same_svg(mod, clean_scene):
+    mm_per_bu_one(clean_scene)
+    border = poly_object("Border", BORDER, role="BORDER")
+    valley = bezier_object("Valley", VALLEY, role="VALLEY")
+    mountain = bezier_object("Mountain", MOUNTAIN, role="MOUNTAIN", angle=90.0)
+    from_blender = mod.curves_from_objects([border, valley, mountain])
+    assert [c.source for c in from_blender] == [
+        "curve 'Border' spline 0",
+        "curve 'Valley' spline 0",
+        "curve 'Mountain' spline 0",
+    ]
+    assert [c.assignment for c in from_blender] == ["B", "V", "M"]
+    assert [c.fold_angle for c in from_blender] == [None, 180.0, -90.0]
+    assert [s.kind for s in from_blender[1].segments] == ["cubic", "cubic"]
+
+    rect = "M " + " L ".join(f"{x!r},{-y!r}" for x, y in BORDER) + " Z"
+    svg = svg_document([(rect, "#000000"), (svg_path(VALLEY), "#0000ff"), (svg_path(MOUNTAIN), "#ff0000")])
+    from_svg = parse_svg_text(svg, "test.svg").curves
+    from_svg[2].fold_angle = -90.0  # SVG angles come from opacity; full opacity = 180
+    for a, b in zip(from_blender, from_svg, strict=True):
+        assert len(a.segments) == len(b.segments)
+        for sa, sb in zip(a.segments, b.segments, strict=True):
+            np.testing.assert_allclose(sa.points, sb.points, rtol=0, atol=1e-9)
+
+    params = {"interval": 5.0, "tolerance": 0.05, "merge_tolerance": 0.01}
+    pa = discretize(from_blender, **params)
+    pb = discretize(from_svg, **params)
+    assert pa.count("V") > 10 and pa.count("M") > 5  # the curves were really subdivided
+    assert_same_pattern(pa, pb)
+
+
+def test_cyclic_bezier_spline_gets_its_closing_segment(mod, clean_scene):
+    mm_per_bu_one(clean_scene)
+    k = 4.0 / 3.0 * math.tan(math.pi / 8) * 32.0  # circle of radius 32 mm around (100, 50)
+    knots = [
+        ((132.0, 50.0 - k), (132.0, 50.0), (132.0, 50.0 + k)),
+        ((100.0 + k, 82.0), (100.0, 82.0), (100.0 - k, 82.0)),
+        ((68.0, 50.0 + k), (68.0, 50.0), (68.0, 50.0 - k)),
+        ((100.0 - k, 18.0), (100.0, 18.0), (100.0 + k, 18.0)),
+    ]
+    ob = bezier_object("Loop", knots, role="VALLEY", cyclic=True)
+    (curve,) = mod.curves_from_objects([ob])
+    assert curve.closed and len(curve.segments) == 4
+    np.testing.assert_allclose(curve.segments[-1].end, curve.segments[0].start, atol=1e-12)
+    np.testing.assert_allclose(curve.segments[-1].points[1], knots[3][2], atol=1e-5)
+    # The same closed path in SVG discretises identically.
+    svg = svg_document([(svg_path(knots, cyclic=True), "#0000ff")])
+    (svg_curve,) = parse_svg_text(svg, "loop.svg").curves
+    params = {"interval": 4.0, "tolerance": 0.05, "merge_tolerance": 0.01}
+    assert_same_pattern(discretize([curve], **params), discretize([svg_curve], **params), rel=1e-6)
+    # A Blender-drawn circle is within 0.03 % of the true radius everywhere.
+    pts = np.concatenate([s.evaluate(np.linspace(0, 1, 50)) for s in curve.segments])
+    radius = np.hypot(pts[:, 0] - 100.0, pts[:, 1] - 50.0)
+    assert np.all(np.abs(radius - 32.0) < 32.0 * 3e-4)
+
+
+def test_world_matrix_is_applied(mod, clean_scene):
+    mm_per_bu_one(clean_scene)
+    ob = bezier_object("Moved", VALLEY, role="VALLEY")
+    ob.location = (12.0, -7.0, 3.0)
+    ob.rotation_euler = (0.0, 0.0, math.radians(30.0))
+    ob.scale = (2.0, 2.0, 2.0)
+    bpy.context.view_layer.update()
+    (curve,) = mod.curves_from_objects([ob])
+    c, s = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
+    expected = np.array([[2 * (c * x - s * y) + 12.0, 2 * (s * x + c * y) - 7.0] for _, (x, y), _ in VALLEY])
+    starts = np.array([seg.start for seg in curve.segments] + [curve.segments[-1].end])
+    np.testing.assert_allclose(starts, expected, atol=1e-4)
+
+
+def test_several_splines_unit_scale_and_poly(mod, clean_scene):
+    clean_scene.unit_settings.scale_length = 1.0  # 1 BU = 1 m
+    ob = bezier_object("Pair", VALLEY, role="MOUNTAIN", scale=0.001)
+    add_bezier_spline(ob.data, MOUNTAIN, scale=0.001)
+    sp = ob.data.splines.new("POLY")
+    sp.points.add(2)
+    for p, (x, y) in zip(sp.points, [(0.0, 0.0), (0.05, 0.0), (0.05, 0.05)], strict=True):
+        p.co = (x, y, 0.0, 1.0)
+    curves = mod.curves_from_objects([ob])
+    assert [c.source for c in curves] == [f"curve 'Pair' spline {k}" for k in range(3)]
+    assert all(c.assignment == "M" and c.fold_angle == -180.0 for c in curves)
+    np.testing.assert_allclose(curves[0].segments[0].start, VALLEY[0][1], rtol=1e-6)
+    np.testing.assert_allclose(curves[1].segments[-1].end, MOUNTAIN[-1][1], rtol=1e-6)
+    assert [s.kind for s in curves[2].segments] == ["line", "line"]
+    np.testing.assert_allclose(curves[2].segments[1].end, (50.0, 50.0), rtol=1e-6)
+    # An explicit unit scale wins over the scene's: 1 BU = 1 mm here.
+    explicit = mod.curves_from_objects([ob], unit_scale=1.0)
+    np.testing.assert_allclose(explicit[0].segments[0].start, np.array(VALLEY[0][1]) * 0.001, rtol=1e-6)
+    # Bézier segments whose handles sit on the chord are straight lines.
+    straight = bezier_object("Straight", [((0, 0), (0, 0), (10, 0)), ((20, 0), (30, 0), (30, 0))], role="VALLEY")
+    (line,) = mod.curves_from_objects([straight], unit_scale=1.0)
+    assert [s.kind for s in line.segments] == ["line"]
+
+
+def test_errors_and_warnings_name_the_curve(mod, clean_scene):
+    mm_per_bu_one(clean_scene)
+    plain = bezier_object("NoRole", VALLEY, role="NONE")
+    with pytest.raises(mod.PatternError, match="no crease curves selected"):
+        mod.curves_from_objects([plain])
+    valley = bezier_object("Valley", VALLEY, role="VALLEY")
+    notes: list[str] = []
+    curves = mod.curves_from_objects([plain, valley], warnings=notes)
+    assert len(curves) == 1 and any("'NoRole'" in n for n in notes)
+
+    tilted = bezier_object("Tilted", VALLEY, role="VALLEY")
+    tilted.rotation_euler = (math.radians(10.0), 0.0, 0.0)
+    bpy.context.view_layer.update()
+    with pytest.raises(mod.PatternError, match="curve 'Tilted' spline 0 is not flat"):
+        mod.curves_from_objects([valley, tilted])
+    raised = bezier_object("Raised", MOUNTAIN, role="MOUNTAIN")
+    raised.location.z = 5.0
+    bpy.context.view_layer.update()
+    with pytest.raises(mod.PatternError, match="curve 'Raised' spline 0 lies at z = 5"):
+        mod.curves_from_objects([valley, raised])
+    nurbs = bpy.data.curves.new("N", "CURVE")
+    nurbs.splines.new("NURBS").points.add(3)
+    ob = bpy.data.objects.new("Nurbs", nurbs)
+    ob.curved_fold.role = "CUT"
+    with pytest.raises(mod.PatternError, match="curve 'Nurbs' spline 0 is a NURBS spline"):
+        mod.curves_from_objects([ob])
+
+
+def test_objects_from_curves_round_trip(mod, clean_scene):
+    mm_per_bu_one(clean_scene)
+    arc = CurveSegment("arc", np.array([[60.0, 50.0], [40.0, 50.0]]), arc=(50.0, 50.0, 10.0, 10.0, 0.0, 0.0, math.pi))
+    curves = [
+        CreaseCurve([CurveSegment("line", np.array([[0.0, 0.0], [200.0, 0.0]]))], "B", None, source="b"),
+        CreaseCurve([CurveSegment("cubic", np.array([[0, 0], [10, 30], [20, -30], [30, 0.5]]))], "V", 120.0),
+        CreaseCurve([arc], "M", -45.0),
+        CreaseCurve(
+            [
+                CurveSegment("line", np.array([[0.0, 0.0], [10.0, 0.0]])),
+                CurveSegment("line", np.array([[10.0, 0.0], [10.0, 10.0]])),
+                CurveSegment("line", np.array([[10.0, 10.0], [0.0, 0.0]])),
+            ],
+            "C",
+            None,
+            closed=True,
+        ),
+    ]
+    coll = bpy.data.collections.new("Imported")
+    clean_scene.collection.children.link(coll)
+    objects = mod.objects_from_curves(curves, coll)
+    assert [ob.curved_fold.role for ob in objects] == ["BORDER", "VALLEY", "MOUNTAIN", "CUT"]
+    assert [ob.curved_fold.fold_angle for ob in objects[1:3]] == [120.0, 45.0]
+    assert all(ob.name in coll.objects for ob in objects)
+    back = mod.curves_from_objects(objects)
+    assert [c.assignment for c in back] == ["B", "V", "M", "C"]
+    assert [c.fold_angle for c in back] == [None, 120.0, -45.0, None]
+    assert back[0].segments[0].kind == "line"
+    np.testing.assert_allclose(back[0].segments[0].points, curves[0].segments[0].points, atol=1e-9)
+    np.testing.assert_allclose(back[1].segments[0].points, curves[1].segments[0].points, atol=1e-5)
+    assert len(back[2].segments) == 2  # 180° arc → two ≤ 90° cubics
+    t = np.linspace(0, 1, 41)
+    pts = np.concatenate([s.evaluate(t) for s in back[2].segments])
+    assert np.max(np.abs(np.hypot(pts[:, 0] - 50.0, pts[:, 1] - 50.0) - 10.0)) < 10.0 * 3e-4
+    np.testing.assert_allclose(back[2].segments[0].start, (60.0, 50.0), atol=1e-5)
+    np.testing.assert_allclose(back[2].segments[-1].end, (40.0, 50.0), atol=1e-5)
+    assert back[3].closed and [s.kind for s in back[3].segments] == ["line"] * 3
+
+
+def test_read_blend_file_leaves_the_open_file_alone(mod, clean_scene, tmp_path):
+    mm_per_bu_one(clean_scene)
+    bezier_object("Valley", VALLEY, role="VALLEY")
+    bezier_object("Plain", MOUNTAIN, role="NONE")
+    poly_object("Border", BORDER, role="BORDER")
+    path = tmp_path / "pattern.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path), copy=True)
+    expected = mod.curves_from_objects(list(clean_scene.objects))
+
+    bpy.ops.wm.read_homefile(use_empty=True)
+    before = {name: len(getattr(bpy.data, name)) for name in ("objects", "curves", "libraries", "scenes")}
+    curves = mod.read_blend_file(path)
+    after = {name: len(getattr(bpy.data, name)) for name in ("objects", "curves", "libraries", "scenes")}
+    assert after == before
+    assert sorted(c.source for c in curves) == sorted(c.source for c in expected)
+    by_source = {c.source: c for c in curves}
+    for c in expected:
+        got = by_source[c.source]
+        assert (got.assignment, got.fold_angle, got.closed) == (c.assignment, c.fold_angle, c.closed)
+        for sa, sb in zip(got.segments, c.segments, strict=True):
+            np.testing.assert_allclose(sa.points, sb.points, atol=1e-9)
+    with pytest.raises(mod.PatternError, match="no such file"):
+        mod.read_blend_file(tmp_path / "missing.blend")
+
+
+def test_set_crease_role_operator_colours_and_selects(extension, clean_scene):
+    properties = importlib.import_module(extension.__name__ + ".scene.properties")
+    a = bezier_object("A", VALLEY, role="NONE")
+    b = bezier_object("B", MOUNTAIN, role="NONE")
+    mesh_ob = bpy.data.objects.new("M", bpy.data.meshes.new("M"))
+    clean_scene.collection.objects.link(mesh_ob)
+    for ob in (a, b, mesh_ob):
+        ob.select_set(True)
+    with bpy.context.temp_override(selected_objects=[a, b, mesh_ob], active_object=a):
+        assert bpy.ops.curved_fold.set_crease_role(role="MOUNTAIN", fold_angle=75.0) == {"FINISHED"}
+    for ob in (a, b):
+        assert ob.curved_fold.role == "MOUNTAIN" and ob.curved_fold.fold_angle == 75.0
+        assert tuple(ob.color) == pytest.approx(properties.ROLE_COLOURS["MOUNTAIN"])
+        assert ob.data.materials[0].name == "Curved Fold Mountain"
+        assert tuple(ob.data.materials[0].diffuse_color) == pytest.approx((1.0, 0.0, 0.0, 1.0))
+        assert ob.data.bevel_depth > 0.0
+    assert "curved_fold" not in mesh_ob.keys() or mesh_ob.curved_fold.role == "NONE"
+    with bpy.context.temp_override(selected_objects=[mesh_ob]):
+        assert not bpy.ops.curved_fold.set_crease_role.poll()
+    b.curved_fold.role = "VALLEY"
+    assert b.data.materials[0].name == "Curved Fold Valley"
+    assert bpy.ops.curved_fold.select_by_role(role="VALLEY") == {"FINISHED"}
+    assert [ob.name for ob in clean_scene.objects if ob.select_get()] == ["B"]

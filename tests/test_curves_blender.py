@@ -318,3 +318,29 @@ def test_set_crease_role_operator_colours_and_selects(extension, clean_scene):
     assert b.data.materials[0].name == "Curved Fold Valley"
     assert bpy.ops.curved_fold.select_by_role(role="VALLEY") == {"FINISHED"}
     assert [ob.name for ob in clean_scene.objects if ob.select_get()] == ["B"]
+
+
+def test_command_line_reads_a_blend_file(mod, clean_scene, tmp_path):
+    """``python -m curved_fold discretize x.blend`` in a fresh process (add-on not enabled) reads the crease curves."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    mm_per_bu_one(clean_scene)
+    bezier_object("Valley", VALLEY, role="VALLEY")
+    poly_object("Border", BORDER, role="BORDER")
+    bezier_object("Ignored", MOUNTAIN, role="NONE")
+    blend = tmp_path / "drawn.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    out = tmp_path / "drawn.fold"
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp_path / "user"))
+    cmd = [sys.executable, "-m", "curved_fold", "discretize", str(blend), "--out", str(out), "--interval", "10"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    fold = json.loads(out.read_text())
+    assignments = fold["edges_assignment"]
+    assert set(assignments) == {"B", "V"}
+    assert assignments.count("V") > 5
+    xs = [v[0] for v in fold["vertices_coords"]]
+    assert min(xs) == pytest.approx(0.0, abs=1e-6) and max(xs) == pytest.approx(200.0, abs=1e-6)

@@ -134,6 +134,7 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
             filepath=str(path),
             export_format="GLB" if suffix == ".glb" else "GLTF_SEPARATE",
             use_selection=True,
+            use_active_scene=True,  # otherwise every scene (the user's too) is written
             export_morph=animated,
             export_morph_normal=False,
             export_animations=animated,

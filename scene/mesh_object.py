@@ -217,7 +217,7 @@ def _write_crease_curves(ob: bpy.types.Object, mesh: FoldMesh, positions_bu: np.
                 coll.objects.link(child)
             child.parent = ob
             child.hide_select = True
-            cu.materials.append(_material(f"Curved Fold {label}", CREASE_COLOURS[role]))
+            cu.materials.append(_material(f"Curved Fold Crease {label}", CREASE_COLOURS[role]))
             child.color = CREASE_COLOURS[role]
         cu = child.data
         if cu.shape_keys is not None:
@@ -262,17 +262,9 @@ def create_fold_object(
     positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
     if len(positions) != mesh.n_vertices:
         raise ValueError(f"positions have {len(positions)} rows, the fold mesh has {mesh.n_vertices} vertices")
-    scale = 1.0 / mm_per_unit(scene)
-    me = bpy.data.meshes.new(name)
+    me = _new_mesh_data(mesh, positions, name, scene)
     ob = None
     try:
-        me.from_pydata((positions * scale).tolist(), [], mesh.triangles.tolist())
-        me.update()
-        if len(me.edges) != len(mesh.edges):
-            raise ValueError(
-                f"fold mesh '{name}': Blender made {len(me.edges)} edges from {mesh.n_faces} triangles, "
-                f"the fold mesh lists {len(mesh.edges)} (an edge outside every triangle?)"
-            )
         ob = bpy.data.objects.new(name, me)
         collection.objects.link(ob)
         write_pattern_attributes(ob, mesh)
@@ -285,6 +277,52 @@ def create_fold_object(
         remove_fold_object(ob, me)
         raise
     return ob
+
+
+def _new_mesh_data(mesh: FoldMesh, positions: np.ndarray, name: str, scene) -> bpy.types.Mesh:
+    """A new Mesh datablock with ``mesh``'s triangles at ``positions`` (mm); removed again if it cannot be made."""
+    me = bpy.data.meshes.new(name)
+    try:
+        me.from_pydata((positions / mm_per_unit(scene)).tolist(), [], mesh.triangles.tolist())
+        me.update()
+        if len(me.edges) != len(mesh.edges):
+            raise ValueError(
+                f"fold mesh '{name}': Blender made {len(me.edges)} edges from {mesh.n_faces} triangles, "
+                f"the fold mesh lists {len(mesh.edges)} (an edge outside every triangle?)"
+            )
+    except Exception:
+        bpy.data.meshes.remove(me)
+        raise
+    return me
+
+
+def replace_fold_mesh(
+    ob: bpy.types.Object,
+    mesh: FoldMesh,
+    positions: np.ndarray,
+    *,
+    scene: bpy.types.Scene | None = None,
+    **results,
+) -> None:
+    """Give the existing fold object ``ob`` a new mesh (a rebuilt pattern): the object, its name, location,
+    modifiers and settings stay; the old mesh datablock (with any baked keys) is deleted. Atomic: if writing the
+    new mesh fails, ``ob`` keeps its old mesh."""
+    positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    old = ob.data
+    me = _new_mesh_data(mesh, positions, old.name, scene)
+    for mat in old.materials:
+        me.materials.append(mat)
+    ob.data = me
+    try:
+        write_pattern_attributes(ob, mesh)
+        ob.pop("cf_crease_topology", None)
+        write_results(ob, mesh, positions, scene=scene, **results)
+    except Exception:
+        ob.data = old
+        bpy.data.meshes.remove(me)
+        raise
+    if old.users == 0:
+        bpy.data.meshes.remove(old)
 
 
 def remove_fold_object(ob: bpy.types.Object | None, me: bpy.types.Mesh | None = None) -> None:

@@ -1,0 +1,276 @@
+"""Glue shared by the operators: gather source curves, run the engine, write the results onto a fold object.
+
+Plain functions (no operator state) so the Live handler, the modal and synchronous bake and the tests call the same
+code. Everything is computed first (pure ``core``) and written last, so a failure leaves the scene as it was.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import bpy
+import numpy as np
+
+from ..core.mesh import FoldMesh
+from ..core.pattern import PatternError
+from ..scene import mesh_object
+from ..scene.fold_settings import settings_dict
+
+FOLD_ERROR_WARN_DEG = 10.0
+"""Mean |simulated − target·percent| fold angle (degrees) above which a fold is reported as not folding as assigned
+(the paper's Fig. 7 situation), when the engine does not raise the flag itself."""
+
+
+@dataclass
+class FoldOutcome:
+    """What one run produced, before anything is written to the scene."""
+
+    mesh: FoldMesh
+    positions: np.ndarray
+    fold_angles: np.ndarray | None
+    strain_pct: np.ndarray | None
+    warp_deg: np.ndarray | None
+    report: dict = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+
+def engine_errors() -> tuple[type[BaseException], ...]:
+    """Exception types the engine raises for bad input or a failed solve (turned into operator reports)."""
+    errors: list[type[BaseException]] = [PatternError, ValueError, FloatingPointError, np.linalg.LinAlgError]
+    try:
+        from ..core.solver import SolverError
+
+        errors.append(SolverError)
+    except ImportError:  # pragma: no cover
+        pass
+    return tuple(errors)
+
+
+def curve_objects(objects) -> list[bpy.types.Object]:
+    """The curve objects among ``objects`` that carry a crease role (others, e.g. crease-display curves, are not)."""
+    out = []
+    for ob in objects:
+        if ob is None or ob.type != "CURVE" or "cf_crease_role" in ob:
+            continue
+        props = getattr(ob, "curved_fold", None)
+        if props is not None and getattr(props, "role", "NONE") == "NONE":
+            continue
+        out.append(ob)
+    return out
+
+
+def solver_settings(props, *, max_iterations: int | None = None):
+    """``core.solver.SolverSettings`` from a fold object's settings (defaults when ``props`` is None);
+    ``max_iterations`` caps the solver (live re-folds)."""
+    from ..core.solver import SolverSettings
+
+    settings = SolverSettings(**settings_dict(props)) if props is not None else SolverSettings()
+    if max_iterations is not None:
+        settings.max_iterations = min(settings.max_iterations, int(max_iterations))
+    return settings
+
+
+def pattern_from_objects(objects, *, interval: float = 0.0, tolerance: float = 0.0):
+    """Discretised :class:`CreasePattern` of crease curve objects; 0 means automatic for interval/tolerance."""
+    from ..core.discretize import discretize
+    from ..scene.curves import curves_from_objects
+
+    if not objects:
+        raise PatternError("no crease curves selected: select curve objects that have a crease role")
+    curves = curves_from_objects(objects)
+    return discretize(curves, interval=interval or None, tolerance=tolerance or None)
+
+
+def per_node_strain_pct(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray:
+    """Origami Simulator's per-node strain in percent: mean over incident bars of |ℓ/L0 − 1|·100 (vectorised)."""
+    try:
+        from ..core import metrics
+
+        return np.asarray(metrics.strain(mesh, positions), dtype=np.float64) * _strain_scale(metrics)
+    except (ImportError, AttributeError):
+        pass
+    flat = mesh.vertices_3d
+    e = mesh.edges
+    L0 = np.linalg.norm(flat[e[:, 1]] - flat[e[:, 0]], axis=1)
+    ln = np.linalg.norm(positions[e[:, 1]] - positions[e[:, 0]], axis=1)
+    s = np.abs(ln / np.where(L0 > 0, L0, 1.0) - 1.0)
+    total = np.bincount(e.ravel(), weights=np.repeat(s, 2), minlength=mesh.n_vertices)
+    deg = np.bincount(e.ravel(), minlength=mesh.n_vertices)
+    return 100.0 * total / np.maximum(deg, 1)
+
+
+def _strain_scale(metrics) -> float:
+    """``core.metrics.strain`` returns fractions unless it documents percent; colours are in percent."""
+    doc = (metrics.strain.__doc__ or "").lower()
+    return 1.0 if "percent" in doc or "%" in doc else 100.0
+
+
+def warp_per_face(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray | None:
+    """Warp angle per triangle (degrees) if ``core.metrics.warp_angles`` gives per-edge or per-face values."""
+    try:
+        from ..core import metrics
+
+        w = np.asarray(metrics.warp_angles(mesh, positions), dtype=np.float64).reshape(-1)
+    except (ImportError, AttributeError, TypeError, ValueError):
+        return None
+    if len(w) == mesh.n_faces or len(w) == mesh.n_vertices:
+        return w
+    if len(w) == len(mesh.edges):  # per edge: spread to the triangles that share the edge (max)
+        n = mesh.n_vertices
+        keys = mesh.edges[:, 0] * n + mesh.edges[:, 1]
+        order = np.argsort(keys)
+        tri = mesh.triangles
+        sides = np.sort(np.stack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]], axis=1), axis=2)
+        sk = sides[..., 0] * n + sides[..., 1]
+        idx = order[np.searchsorted(keys[order], sk)]
+        return np.nanmax(np.where(np.isfinite(w[idx]), w[idx], 0.0), axis=1)
+    return None
+
+
+def fold_angle_error_message(report: dict, percent: float) -> str:
+    """The paper's Fig. 7 message when the pattern did not fold as assigned, else ``""``."""
+    if report.get("does_not_fold_as_assigned"):
+        return str(report.get("does_not_fold_message") or "does not fold as assigned (large fold-angle error)")
+    err = report.get("fold_angle_error_mean_deg")
+    if err is not None and np.isfinite(err) and err > FOLD_ERROR_WARN_DEG:
+        return (
+            f"does not fold as assigned: mean fold-angle error {err:.1f}° at {100 * percent:.0f} % "
+            f"(over {FOLD_ERROR_WARN_DEG:.0f}°); check mountain/valley roles and angles"
+        )
+    return ""
+
+
+def outcome_from_run(run, percent: float) -> FoldOutcome:
+    """Turn a ``core.pipeline.FoldRun`` into a :class:`FoldOutcome` with per-node strain and per-face warp."""
+    mesh, result = run.mesh, run.result
+    pos = np.asarray(result.positions, dtype=np.float64)
+    if not np.all(np.isfinite(pos)):
+        raise FloatingPointError("the solver returned non-finite positions (the fold diverged)")
+    report = dict(getattr(run, "report", {}) or {})
+    return FoldOutcome(
+        mesh=mesh,
+        positions=pos,
+        fold_angles=getattr(result, "fold_angles", None),
+        strain_pct=per_node_strain_pct(mesh, pos),
+        warp_deg=warp_per_face(mesh, pos),
+        report=report,
+        warnings=[str(w) for w in report.get("warnings", mesh.warnings)],
+    )
+
+
+def fold_from_pattern(
+    pattern,
+    props,
+    *,
+    percent: float | None = None,
+    angle: float | None = None,
+    mesh_type: str | None = None,
+    solver: str | None = None,
+    max_iterations: int | None = None,
+) -> FoldOutcome:
+    """Mesh and fold ``pattern`` with the settings in ``props`` (a fold object's settings, or None for defaults);
+    explicit keyword values win over ``props``. ``percent`` is a fraction (1.0 = 100 %)."""
+    from ..core.pipeline import fold_pattern
+
+    pct = (props.fold_percent / 100.0 if props is not None else 1.0) if percent is None else percent
+    mesh_type = mesh_type or (props.mesh_type if props is not None else "ruling")
+    method = solver or (props.solver if props is not None else "fast")
+    if angle is None and props is not None and props.use_fold_angle:
+        angle = props.fold_angle
+    run = fold_pattern(
+        pattern,
+        angle=angle,
+        percent=pct,
+        mesh_type=mesh_type,
+        solver=method,
+        settings=solver_settings(props, max_iterations=max_iterations),
+    )
+    return outcome_from_run(run, pct)
+
+
+def resolve_stored(
+    ob: bpy.types.Object,
+    *,
+    percent: float | None = None,
+    start: np.ndarray | None = None,
+    max_iterations: int | None = None,
+):
+    """Re-solve the FoldMesh stored on ``ob`` (no rebuild) with its current settings."""
+    from ..core.solver import solve
+
+    props = ob.curved_fold_mesh
+    mesh = mesh_object.read_fold_mesh(ob)
+    pct = props.fold_percent / 100.0 if percent is None else percent
+    settings = solver_settings(props, max_iterations=max_iterations)
+    result = solve(mesh, pct, method=props.solver, settings=settings, start=start)
+    run = type("Run", (), {"mesh": mesh, "result": result, "report": _report(mesh, result, pct)})()
+    return outcome_from_run(run, pct)
+
+
+def _report(mesh: FoldMesh, result, percent: float) -> dict:
+    rep = {
+        "vertices": mesh.n_vertices,
+        "faces": mesh.n_faces,
+        "simulation_ms": float(getattr(result, "simulation_ms", 0.0)),
+        "iterations": int(getattr(result, "iterations", 0)),
+        "converged": bool(getattr(result, "converged", False)),
+    }
+    try:
+        from ..core import metrics
+
+        rep.update(metrics.summary(mesh, result.positions, percent=percent))
+    except (ImportError, AttributeError, TypeError):
+        pass
+    return rep
+
+
+def source_objects(ob: bpy.types.Object) -> list[bpy.types.Object]:
+    """The crease curves a fold object was built from: its source collection's curves, or its source list."""
+    props = ob.curved_fold_mesh
+    if props.source_collection is not None:
+        return curve_objects(props.source_collection.all_objects)
+    return curve_objects([s.object for s in props.sources if s.object is not None])
+
+
+def store_outcome(ob: bpy.types.Object, out: FoldOutcome, *, scene=None) -> None:
+    """Write positions, attributes, colours and the last-run figures of ``out`` onto the fold object ``ob``."""
+    mesh_object.write_results(
+        ob,
+        out.mesh,
+        out.positions,
+        fold_angles_sim=out.fold_angles,
+        strain_pct=out.strain_pct,
+        warp_deg=out.warp_deg,
+        scene=scene,
+    )
+    store_figures(ob, out)
+
+
+def store_figures(ob: bpy.types.Object, out: FoldOutcome) -> None:
+    props = ob.curved_fold_mesh
+    rep = out.report
+    props.last_vertices = out.mesh.n_vertices
+    props.last_faces = out.mesh.n_faces
+    props.last_generation_ms = float(rep.get("generation_ms", out.mesh.generation_ms) or 0.0)
+    props.last_ms = float(rep.get("simulation_ms", 0.0) or 0.0)
+    props.last_iterations = int(rep.get("iterations", 0) or 0)
+    props.last_converged = bool(rep.get("converged", False))
+    strain = out.strain_pct if out.strain_pct is not None else np.zeros(1)
+    props.last_strain_mean = float(rep.get("strain_mean_pct", np.mean(strain)))
+    props.last_strain_max = float(rep.get("strain_max_pct", np.max(strain)))
+    warp = rep.get("warp_mean_deg")
+    if warp is None and out.warp_deg is not None:
+        warp = float(np.nanmean(out.warp_deg))
+    props.last_warp_mean = float(warp or 0.0)
+    err = rep.get("fold_angle_error_mean_deg")
+    props.last_fold_error = float(err) if err is not None and np.isfinite(err) else 0.0
+    props.last_message = fold_angle_error_message(rep, props.fold_percent / 100.0)
+
+
+def figures_text(props) -> str:
+    """One line with the last run's figures, for reports."""
+    return (
+        f"{props.last_faces} faces, {props.last_ms:.0f} ms, {props.last_iterations} iterations, "
+        f"strain {props.last_strain_mean:.3f} % mean / {props.last_strain_max:.3f} % max, "
+        f"warp {props.last_warp_mean:.3f}°" + ("" if props.last_converged else " (not converged)")
+    )

@@ -1,0 +1,197 @@
+"""Fold and Re-fold operators: crease curves → ruling-aware mesh → folded mesh object (source curves untouched)."""
+
+from __future__ import annotations
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
+
+from ..scene import bake, mesh_object
+from ..scene.fold_settings import MESH_TYPES
+from . import _common
+
+
+def refold(
+    ob: bpy.types.Object, *, rebuild: bool | None = None, scene=None, max_iterations: int | None = None
+) -> _common.FoldOutcome:
+    """Re-fold the fold object ``ob``: rebuild the mesh from its source curves (when it has sources and ``rebuild``
+    is not False) or re-solve its stored mesh, then write the result. Any bake is cleared (it would be stale).
+
+    Everything is computed before anything is written; raises the engine's errors unchanged.
+    """
+    props = ob.curved_fold_mesh
+    sources = _common.source_objects(ob)
+    if rebuild is None:
+        rebuild = bool(sources)
+    if rebuild:
+        if not sources:
+            raise _common.PatternError(f"'{ob.name}' has no source crease curves left to rebuild from")
+        pattern = _common.pattern_from_objects(sources, interval=props.interval, tolerance=props.tolerance)
+        out = _common.fold_from_pattern(pattern, props, max_iterations=max_iterations)
+    else:
+        out = _common.resolve_stored(ob, max_iterations=max_iterations)
+    bake.clear_bake(ob)
+    props.baked_frames = 0
+    results = {"fold_angles_sim": out.fold_angles, "strain_pct": out.strain_pct, "warp_deg": out.warp_deg}
+    if rebuild:
+        mesh_object.replace_fold_mesh(ob, out.mesh, out.positions, scene=scene, **results)
+    else:
+        mesh_object.write_results(ob, out.mesh, out.positions, scene=scene, **results)
+    _common.store_figures(ob, out)
+    return out
+
+
+class CURVED_FOLD_OT_fold(bpy.types.Operator):
+    """Build the ruling-aware mesh from the selected crease curves (or a collection) and fold it"""
+
+    bl_idname = "curved_fold.fold"
+    bl_label = "Fold Crease Pattern"
+    bl_description = (
+        "Triangulate the selected crease curves (or the chosen collection) with ruling-aware edge swaps and fold "
+        "the result into a new mesh object beside them; the curves are not changed"
+    )
+    bl_options = {"REGISTER", "UNDO"}
+
+    collection: StringProperty(
+        name="Collection", description="Fold the crease curves of this collection instead of the selection"
+    )
+    interval: FloatProperty(
+        name="Interval", description="Largest chord length in mm (0 = automatic)", default=0.0, min=0.0
+    )
+    tolerance: FloatProperty(
+        name="Tolerance", description="Largest curve-to-chord distance in mm (0 = automatic)", default=0.0, min=0.0
+    )
+    mesh_type: EnumProperty(name="Mesh", items=MESH_TYPES, default="ruling")
+    use_fold_angle: BoolProperty(
+        name="Override Angle", description="Give creases without an angle this fold angle", default=False
+    )
+    fold_angle: FloatProperty(name="Fold Angle", default=180.0, min=0.0, max=180.0)
+    fold_percent: FloatProperty(
+        name="Fold Percent", default=100.0, min=0.0, max=100.0, subtype="PERCENTAGE", description="How far to fold"
+    )
+    solver: EnumProperty(
+        name="Solver",
+        items=(("fast", "Fast", "Solve to equilibrium (default)"), ("faithful", "Faithful", "Origami Simulator's")),
+        default="fast",
+    )
+
+    @classmethod
+    def poll(cls, context):
+        if context.mode != "OBJECT":
+            cls.poll_message_set("Switch to Object Mode")
+            return False
+        if not _common.curve_objects(context.selected_objects or []):
+            cls.poll_message_set("Select crease curve objects (curves with a crease role)")
+            return False
+        return True
+
+    def _sources(self, context):
+        if self.collection:
+            coll = bpy.data.collections.get(self.collection)
+            if coll is None:
+                raise _common.PatternError(f"no collection named '{self.collection}'")
+            return coll, _common.curve_objects(coll.all_objects)
+        return None, _common.curve_objects(context.selected_objects or [])
+
+    def execute(self, context):
+        try:
+            coll, sources = self._sources(context)
+            pattern = _common.pattern_from_objects(sources, interval=self.interval, tolerance=self.tolerance)
+            out = _common.fold_from_pattern(
+                pattern,
+                None,
+                percent=self.fold_percent / 100.0,
+                angle=self.fold_angle if self.use_fold_angle else None,
+                mesh_type=self.mesh_type,
+                solver=self.solver,
+            )
+        except _common.engine_errors() as exc:
+            self.report({"ERROR"}, f"Fold failed: {exc}")
+            return {"CANCELLED"}
+        target = sources[0].users_collection[0] if sources[0].users_collection else context.scene.collection
+        name = f"{(coll.name if coll else sources[0].name)} Folded"
+        ob = None
+        try:
+            ob = mesh_object.create_fold_object(
+                out.mesh,
+                out.positions,
+                name,
+                target,
+                fold_angles_sim=out.fold_angles,
+                strain_pct=out.strain_pct,
+                warp_deg=out.warp_deg,
+                scene=context.scene,
+            )
+            width = float(np.ptp(out.mesh.vertices[:, 0])) / mesh_object.mm_per_unit(context.scene)
+            ob.location.x += 1.15 * width  # beside the flat curves, which stay editable
+            props = ob.curved_fold_mesh
+            props.is_fold_mesh = True
+            props.source_collection = coll
+            for src in sources:
+                props.sources.add().object = src
+            props.interval, props.tolerance, props.mesh_type = self.interval, self.tolerance, self.mesh_type
+            props.use_fold_angle, props.fold_angle = self.use_fold_angle, self.fold_angle
+            props.fold_percent, props.solver = self.fold_percent, self.solver
+            _common.store_figures(ob, out)
+        except Exception as exc:  # any write failure: remove what was made, report, leave the scene as it was
+            mesh_object.remove_fold_object(ob)
+            self.report({"ERROR"}, f"Fold failed while writing the mesh: {exc}")
+            return {"CANCELLED"}
+        for other in context.selected_objects:
+            other.select_set(False)
+        ob.select_set(True)
+        context.view_layer.objects.active = ob
+        for warning in out.warnings[:5]:
+            self.report({"WARNING"}, warning)
+        props = ob.curved_fold_mesh
+        if props.last_message:
+            self.report({"WARNING"}, f"'{ob.name}' {props.last_message}")
+        self.report({"INFO"}, f"Folded '{ob.name}': {_common.figures_text(props)}")
+        return {"FINISHED"}
+
+
+class CURVED_FOLD_OT_refold(bpy.types.Operator):
+    """Fold the active folded mesh again from its source curves and current settings"""
+
+    bl_idname = "curved_fold.refold"
+    bl_label = "Re-fold"
+    bl_description = (
+        "Rebuild the active folded mesh from its source crease curves (or re-solve its stored mesh if the curves "
+        "are gone) with the current settings; clears any bake"
+    )
+    bl_options = {"REGISTER", "UNDO"}
+
+    rebuild: EnumProperty(
+        name="Rebuild",
+        items=(
+            ("AUTO", "Auto", "Rebuild from the source curves when they exist, else re-solve the stored mesh"),
+            ("REBUILD", "Rebuild", "Always rebuild the mesh from the source curves"),
+            ("RESOLVE", "Re-solve", "Keep the mesh, only solve again (fold percent, solver settings)"),
+        ),
+        default="AUTO",
+    )
+
+    @classmethod
+    def poll(cls, context):
+        ob = context.active_object
+        if ob is None or not ob.curved_fold_mesh.is_fold_mesh:
+            cls.poll_message_set("The active object is not a folded mesh")
+            return False
+        return context.mode == "OBJECT"
+
+    def execute(self, context):
+        ob = context.active_object
+        rebuild = {"AUTO": None, "REBUILD": True, "RESOLVE": False}[self.rebuild]
+        try:
+            refold(ob, rebuild=rebuild, scene=context.scene)
+        except _common.engine_errors() as exc:
+            self.report({"ERROR"}, f"Re-fold of '{ob.name}' failed: {exc}")
+            return {"CANCELLED"}
+        props = ob.curved_fold_mesh
+        if props.last_message:
+            self.report({"WARNING"}, f"'{ob.name}' {props.last_message}")
+        self.report({"INFO"}, f"Re-folded '{ob.name}': {_common.figures_text(props)}")
+        return {"FINISHED"}
+
+
+CLASSES = (CURVED_FOLD_OT_fold, CURVED_FOLD_OT_refold)

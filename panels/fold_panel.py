@@ -1,0 +1,171 @@
+"""Sidebar panels (Curved Fold tab) for folding: the Fold button for selected crease curves, and for a folded mesh
+its pattern parameters, fold angle and percent (keyframable), solver settings, Re-fold / Live / Bake / Export, the
+last run's figures and the "does not fold as assigned" message. Drawing only: no numerics here."""
+
+from __future__ import annotations
+
+import bpy
+
+
+def _fold_props(context):
+    ob = context.active_object
+    props = getattr(ob, "curved_fold_mesh", None) if ob is not None else None
+    return props if props is not None and props.is_fold_mesh else None
+
+
+class VIEW3D_PT_curved_fold_fold(bpy.types.Panel):
+    """Fold the selected crease curves"""
+
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Curved Fold"
+    bl_label = "Fold"
+    bl_order = 0
+
+    @classmethod
+    def poll(cls, context):
+        return _fold_props(context) is None
+
+    def draw(self, context):
+        layout = self.layout
+        curves = [ob for ob in context.selected_objects if ob.type == "CURVE"]
+        layout.label(text=f"{len(curves)} curve(s) selected", icon="CURVE_BEZCURVE")
+        layout.operator("curved_fold.fold", icon="MOD_SIMPLEDEFORM")
+        layout.operator("curved_fold.import_pattern", icon="IMPORT")
+
+
+class VIEW3D_PT_curved_fold_mesh(bpy.types.Panel):
+    """Settings and figures of the active folded mesh"""
+
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Curved Fold"
+    bl_label = "Folded Mesh"
+    bl_order = 0
+
+    @classmethod
+    def poll(cls, context):
+        return _fold_props(context) is not None
+
+    def draw(self, context):
+        layout = self.layout
+        props = _fold_props(context)
+        layout.use_property_split = True
+        layout.use_property_decorate = True  # the keyframe dot: Fold Percent animates the fold
+        col = layout.column()
+        col.prop(props, "fold_percent", slider=True)
+        row = col.row(align=True)
+        row.prop(props, "use_fold_angle", text="Override Angle")
+        sub = row.row()
+        sub.active = props.use_fold_angle
+        sub.prop(props, "fold_angle", text="")
+        row = layout.row(align=True)
+        row.scale_y = 1.3
+        row.operator("curved_fold.refold", icon="FILE_REFRESH")
+        row.prop(props, "live", toggle=True, icon="REC" if props.live else "RADIOBUT_OFF")
+        if props.last_message:
+            box = layout.box()
+            box.alert = True
+            for i in range(0, len(props.last_message), 60):
+                box.label(text=props.last_message[i : i + 60], icon="ERROR" if i == 0 else "BLANK1")
+
+
+class VIEW3D_PT_curved_fold_pattern(bpy.types.Panel):
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Curved Fold"
+    bl_label = "Pattern"
+    bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        props = _fold_props(context)
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(props, "mesh_type")
+        layout.prop(props, "interval")
+        layout.prop(props, "tolerance")
+        layout.prop(props, "source_collection")
+        layout.label(text=f"{len(props.sources)} source curve(s)")
+
+
+class VIEW3D_PT_curved_fold_solver(bpy.types.Panel):
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Curved Fold"
+    bl_label = "Solver"
+    bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        props = _fold_props(context)
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(props, "solver")
+        layout.prop(props, "isometric")
+        col = layout.column(align=True, heading="Stiffness")
+        for name in ("axial_stiffness", "crease_stiffness", "panel_stiffness", "face_stiffness", "damping"):
+            col.prop(props, name)
+
+
+class VIEW3D_PT_curved_fold_animation(bpy.types.Panel):
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Curved Fold"
+    bl_label = "Animation & Export"
+    bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
+
+    def draw(self, context):
+        layout = self.layout
+        props = _fold_props(context)
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(props, "solver_mode")
+        row = layout.row()
+        row.active = props.solver_mode == "DYNAMIC"
+        row.prop(props, "steps_per_frame")
+        scene = context.scene
+        layout.label(text=f"Frames {scene.frame_start}–{scene.frame_end}; baked: {props.baked_frames}")
+        row = layout.row(align=True)
+        row.operator("curved_fold.bake", icon="RENDER_ANIMATION")
+        row.operator("curved_fold.clear_bake", text="", icon="X")
+        row = layout.row(align=True)
+        row.operator("curved_fold.export_folded", text="Export Mesh", icon="EXPORT")
+        row.operator("curved_fold.export_pattern_svg", text="Export SVG", icon="FILE_IMAGE")
+
+
+class VIEW3D_PT_curved_fold_figures(bpy.types.Panel):
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Curved Fold"
+    bl_label = "Last Run"
+    bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
+
+    def draw(self, context):
+        props = _fold_props(context)
+        col = self.layout.column(align=True)
+        rows = (
+            ("Faces", f"{props.last_faces}  ({props.last_vertices} vertices)"),
+            ("Mesh", f"{props.last_generation_ms:.1f} ms"),
+            ("Solver", f"{props.last_ms:.1f} ms, {props.last_iterations} it." + ("" if props.last_converged else " ⚠")),
+            ("Strain", f"{props.last_strain_mean:.4f} % mean, {props.last_strain_max:.4f} % max"),
+            ("Warp", f"{props.last_warp_mean:.4f}° mean"),
+            ("Fold error", f"{props.last_fold_error:.3f}° mean"),
+        )
+        for label, value in rows:
+            split = col.split(factor=0.35)
+            split.label(text=label)
+            split.label(text=value)
+        self.layout.label(text="Viewport: Attribute colour cf_strain / cf_warp", icon="INFO")
+
+
+CLASSES = (
+    VIEW3D_PT_curved_fold_fold,
+    VIEW3D_PT_curved_fold_mesh,
+    VIEW3D_PT_curved_fold_pattern,
+    VIEW3D_PT_curved_fold_solver,
+    VIEW3D_PT_curved_fold_animation,
+    VIEW3D_PT_curved_fold_figures,
+)

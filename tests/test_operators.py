@@ -1,0 +1,304 @@
+"""The operators through ``bpy.ops``, with the extension installed from its built zip (tests/conftest.py).
+
+Fold on curves made here, Bake over 10 frames (keys, keyframes, positions equal to the solver's per frame),
+Import SVG/FOLD round trips, exports that Blender re-imports, failing operators leave the scene exactly as it was,
+undo restores the state, and the Live handler's detection + debounced re-fold.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+pytestmark = pytest.mark.usefixtures("extension")
+
+
+def mod(extension, name):
+    """A module of the INSTALLED add-on (the copy Blender registered)."""
+    return importlib.import_module(f"{extension.__name__}.{name}")
+
+
+def make_curve(name, pieces_mm, role, angle=None, closed=False, collection=None):
+    """A Bézier curve object from cubic pieces (4×2 mm control points each), with a crease role."""
+    cu = bpy.data.curves.new(name, type="CURVE")
+    cu.dimensions = "2D"
+    sp = cu.splines.new("BEZIER")
+    knots = len(pieces_mm) + (0 if closed else 1)
+    sp.bezier_points.add(knots - 1)
+    s = 1e-3  # 1 BU = 1000 mm (unit scale 1)
+    for j, bp in enumerate(sp.bezier_points):
+        nxt = pieces_mm[j] if j < len(pieces_mm) else None
+        prev = pieces_mm[j - 1] if (j > 0 or closed) else None
+        co = nxt[0] if nxt is not None else prev[3]
+        bp.handle_left_type = bp.handle_right_type = "FREE"
+        bp.co = (co[0] * s, co[1] * s, 0)
+        h_r = nxt[1] if nxt is not None else co
+        h_l = prev[2] if prev is not None else co
+        bp.handle_right = (h_r[0] * s, h_r[1] * s, 0)
+        bp.handle_left = (h_l[0] * s, h_l[1] * s, 0)
+    sp.use_cyclic_u = closed
+    ob = bpy.data.objects.new(name, cu)
+    (collection or bpy.context.scene.collection).objects.link(ob)
+    ob.curved_fold.role = role
+    if angle is not None:
+        ob.curved_fold.fold_angle = angle
+    return ob
+
+
+def line(a, b):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return np.array([a, a + (b - a) / 3, a + 2 * (b - a) / 3, b])
+
+
+def curved_pattern(collection=None):
+    """A 100 × 60 mm sheet with one S-shaped valley (90°) crossing it bottom to top."""
+    corners = [(0, 0), (100, 0), (100, 60), (0, 60)]
+    border = make_curve(
+        "Border",
+        [line(corners[i], corners[(i + 1) % 4]) for i in range(4)],
+        "BORDER",
+        closed=True,
+        collection=collection,
+    )
+    crease = make_curve(
+        "Valley", [np.array([[50, 0], [30, 20], [70, 40], [50, 60]], float)], "VALLEY", 90.0, collection=collection
+    )
+    return border, crease
+
+
+def select_only(objects):
+    bpy.context.view_layer.update()  # newly linked objects join the view layer on update
+    for ob in bpy.context.view_layer.objects:
+        ob.select_set(ob in objects)
+    bpy.context.view_layer.objects.active = objects[0]
+
+
+def snapshot():
+    """Everything a failing operator must not change: datablocks, curve points, shape keys, attributes."""
+    state = {}
+    for ob in bpy.data.objects:
+        entry = [ob.type, ob.data.name if ob.data else None, tuple(ob.location), ob.parent and ob.parent.name]
+        if ob.type == "CURVE":
+            entry.append(
+                tuple(
+                    tuple(round(c, 9) for bp in sp.bezier_points for c in (*bp.co, *bp.handle_left, *bp.handle_right))
+                    for sp in ob.data.splines
+                )
+            )
+            entry.append((ob.curved_fold.role, ob.curved_fold.fold_angle))
+        if ob.type == "MESH":
+            me = ob.data
+            co = np.empty(3 * len(me.vertices), dtype=np.float32)
+            me.attributes["position"].data.foreach_get("vector", co)
+            entry.append(co.round(7).tobytes())
+            entry.append(tuple(sorted(a.name for a in me.attributes)))
+            keys = me.shape_keys
+            entry.append(tuple(k.name for k in keys.key_blocks) if keys else None)
+        state[ob.name] = entry
+    for kind in ("meshes", "curves", "collections", "actions", "materials", "scenes"):
+        state[kind] = sorted(d.name for d in getattr(bpy.data, kind))
+    return state
+
+
+def evaluated_mm(ob):
+    ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    co = np.empty(3 * len(ev.data.vertices), dtype=np.float32)
+    ev.data.attributes["position"].data.foreach_get("vector", co)
+    return co.reshape(-1, 3).astype(np.float64) * 1000.0
+
+
+@pytest.fixture
+def folded(extension, clean_scene):
+    """Fold the curved pattern at 100 %; returns (fold object, border, crease)."""
+    border, crease = curved_pattern()
+    select_only([border, crease])
+    assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+    ob = bpy.context.active_object
+    return ob, border, crease
+
+
+def test_operators_and_menus_registered(extension):
+    for name in ("fold", "refold", "bake", "clear_bake", "import_pattern", "export_folded", "export_pattern_svg"):
+        assert hasattr(bpy.ops.curved_fold, name), name
+        assert getattr(bpy.ops.curved_fold, name).get_rna_type().description  # tooltip
+    assert "UNDO" in bpy.types.CURVED_FOLD_OT_fold.bl_options
+    assert hasattr(bpy.types.Object, "curved_fold_mesh")
+
+
+def test_fold_creates_folded_mesh_and_leaves_curves(folded):
+    ob, border, crease = folded
+    before_curves = (tuple(crease.data.splines[0].bezier_points[0].co), crease.curved_fold.role)
+    me = ob.data
+    props = ob.curved_fold_mesh
+    assert ob.type == "MESH" and props.is_fold_mesh and len(me.polygons) > 10
+    names = {a.name for a in me.attributes}
+    assert {"cf_flat", "cf_assignment", "cf_fold_angle", "cf_fold_angle_sim", "cf_strain", "cf_face"} <= names
+    codes = np.empty(len(me.edges), dtype=np.int32)
+    me.attributes["cf_assignment"].data.foreach_get("value", codes)
+    assert np.count_nonzero(codes == 2) >= 5  # valley edges along the discretised S-curve ("V" = index 2)
+    co = evaluated_mm(ob)
+    assert np.ptp(co[:, 2]) > 5.0  # it folded out of the plane
+    assert props.last_faces == len(me.polygons) and props.last_iterations > 0
+    assert [s.object.name for s in props.sources] == ["Border", "Valley"]
+    roles = {c["cf_crease_role"] for c in ob.children}
+    assert roles == {"V"}
+    assert before_curves == (tuple(crease.data.splines[0].bezier_points[0].co), "VALLEY")
+
+
+def test_failing_fold_leaves_scene_exactly_as_before(extension, clean_scene):
+    border, crease = curved_pattern()
+    crease.location.z = 0.01  # out of the sheet's plane: curves_from_objects refuses, naming the curve
+    bpy.context.view_layer.update()
+    select_only([border, crease])
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="Valley"):
+        bpy.ops.curved_fold.fold()
+    assert snapshot() == before
+
+
+def test_undo_restores_state_before_fold(extension, clean_scene):
+    border, crease = curved_pattern()
+    select_only([border, crease])
+    bpy.ops.ed.undo_push(message="before fold")
+    names = sorted(o.name for o in bpy.data.objects)
+    # ('EXEC_DEFAULT', True): run with an undo push, as from the interface (plain script calls skip the push).
+    assert bpy.ops.curved_fold.fold("EXEC_DEFAULT", True) == {"FINISHED"}
+    assert len(bpy.data.objects) > len(names)
+    assert bpy.ops.ed.undo() == {"FINISHED"}
+    assert sorted(o.name for o in bpy.data.objects) == names
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    assert any(o.name.endswith("Folded") for o in bpy.data.objects)
+
+
+def test_bake_ten_frames_matches_solver(folded, extension):
+    ob, _, _ = folded
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 10
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    keys = ob.data.shape_keys.key_blocks
+    frame_keys = [k for k in keys if k.name.startswith("cf_frame_")]
+    assert len(frame_keys) == 10
+    scene.frame_set(5)  # keyed values: exactly this frame's key is 1 (Blender 5.0 would leave new keys at 1.0)
+    assert [k.value for k in frame_keys] == [1.0 if i == 4 else 0.0 for i in range(10)]
+    assert ob.curved_fold_mesh.baked_frames == 10
+    # Keyed: every key value has an F-curve with keyframes at its neighbouring frames.
+    bake_mod = mod(extension, "scene.bake")
+    fcurves = bake_mod._fcurves(ob.data.shape_keys)
+    assert len(fcurves) == 10 and all(1 <= len(fc.keyframe_points) <= 3 for fc in fcurves)
+    # The same frames computed again, independently, with the same per-frame stepping.
+    ops_bake = mod(extension, "operators.bake")
+    job = ops_bake.BakeJob(ob, list(range(1, 11)))
+    np.testing.assert_allclose(job.percents, np.linspace(0, 1, 10))
+    job.step()
+    for f, expected in zip(range(1, 11), job.positions, strict=True):
+        scene.frame_set(f)
+        np.testing.assert_allclose(evaluated_mm(ob), expected, atol=5e-3)
+    assert bpy.ops.curved_fold.clear_bake() == {"FINISHED"}
+    assert ob.data.shape_keys is None
+
+
+def test_bake_follows_keyframed_fold_percent(folded, extension):
+    ob, _, _ = folded
+    props = ob.curved_fold_mesh
+    props.fold_percent = 20.0
+    props.keyframe_insert("fold_percent", frame=1)
+    props.fold_percent = 60.0
+    props.keyframe_insert("fold_percent", frame=5)
+    ops_bake = mod(extension, "operators.bake")
+    pct = ops_bake.percent_schedule(ob, [1, 3, 5, 7])
+    assert pct[0] == pytest.approx(0.2) and pct[2] == pytest.approx(0.6) and pct[3] == pytest.approx(0.6)
+    assert 0.2 < pct[1] < 0.6
+
+
+def test_modal_bake_job_is_atomic_on_cancel(folded, extension):
+    """The modal path's work unit: frames computed in budgeted steps, nothing written until write()."""
+    ob, _, _ = folded
+    before = snapshot()
+    job = mod(extension, "operators.bake").BakeJob(ob, list(range(1, 6)))
+    job.step(budget_s=0.0)  # one frame per tick at least
+    assert 0 < len(job.positions) < 5 and 0 < job.progress < 1
+    del job  # Esc: the job is dropped
+    assert snapshot() == before
+
+
+def test_export_operators_write_files_blender_reimports(folded, tmp_path):
+    ob, _, _ = folded
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 3
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    before = snapshot()
+    for fmt, suffix in (("GLB", ".glb"), ("OBJ", ".obj"), ("STL", ".stl"), ("FOLD", ".fold")):
+        path = tmp_path / f"out{suffix}"
+        assert bpy.ops.curved_fold.export_folded(filepath=str(path), file_format=fmt) == {"FINISHED"}, fmt
+        assert path.stat().st_size > 0
+    assert bpy.ops.curved_fold.export_pattern_svg(filepath=str(tmp_path / "cp.svg")) == {"FINISHED"}
+    assert snapshot() == before  # exports never touch the scene
+    bpy.ops.import_scene.gltf(filepath=str(tmp_path / "out.glb"))
+    glb = [o for o in bpy.data.objects if o.name not in before and o.type == "MESH"]
+    assert len(glb) == 1 and len(glb[0].data.shape_keys.key_blocks) == 4
+    bpy.ops.wm.obj_import(filepath=str(tmp_path / "out.obj"))
+    bpy.ops.wm.stl_import(filepath=str(tmp_path / "out.stl"))
+    assert len([o for o in bpy.data.objects if o.type == "MESH"]) == 4
+    import json
+
+    doc = json.loads((tmp_path / "out.fold").read_text())
+    assert len(doc.get("file_frames", [])) + 1 >= 3 or len(doc["vertices_coords"]) == len(ob.data.vertices)
+
+
+def test_import_svg_round_trip(folded, tmp_path):
+    ob, _, _ = folded
+    svg = tmp_path / "cp.svg"
+    assert bpy.ops.curved_fold.export_pattern_svg(filepath=str(svg)) == {"FINISHED"}
+    n_before = len(bpy.data.objects)
+    assert bpy.ops.curved_fold.import_pattern(filepath=str(svg)) == {"FINISHED"}
+    imported = [o for o in bpy.data.collections["cp"].objects]
+    roles = sorted(o.curved_fold.role for o in imported)
+    assert roles == ["BORDER", "VALLEY"] and len(bpy.data.objects) == n_before + 2
+    valley = next(o for o in imported if o.curved_fold.role == "VALLEY")
+    assert valley.curved_fold.fold_angle == pytest.approx(90.0, abs=1e-3)
+    # Folding the imported curves gives the same pattern: same vertex count within the discretiser's freedom.
+    select_only(imported)
+    assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+    refolded = bpy.context.active_object
+    flat_a = np.empty(2 * len(ob.data.vertices), np.float32)
+    ob.data.attributes["cf_flat"].data.foreach_get("vector", flat_a)
+    flat_b = np.empty(2 * len(refolded.data.vertices), np.float32)
+    refolded.data.attributes["cf_flat"].data.foreach_get("vector", flat_b)
+    # SVG export shifts the sheet to its corner; sizes agree.
+    np.testing.assert_allclose(np.ptp(flat_a.reshape(-1, 2), axis=0), np.ptp(flat_b.reshape(-1, 2), axis=0), atol=0.01)
+
+
+def test_import_failure_leaves_scene(extension, clean_scene, tmp_path):
+    bad = tmp_path / "bad.svg"
+    bad.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path d="M 0 0 L" stroke="#ff0000"/></svg>')
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="bad.svg|path"):
+        bpy.ops.curved_fold.import_pattern(filepath=str(bad))
+    assert snapshot() == before
+
+
+def test_live_handler_detects_source_edits_and_refolds(folded, extension):
+    ob, border, crease = folded
+    live = mod(extension, "operators.live")
+    assert live.fold_objects_to_refold([crease]) == []  # Live is off
+    ob.curved_fold_mesh.live = True
+    live._pending.clear()
+    assert live.fold_objects_to_refold([crease]) == [ob.name]
+    assert live.fold_objects_to_refold([crease.data]) == [ob.name]
+    assert live.fold_objects_to_refold([ob, *ob.children]) == []  # its own updates are ignored
+    # Edit the crease: move the middle handles; the debounced re-fold rebuilds the mesh from the edited curve.
+    flat_before = np.empty(2 * len(ob.data.vertices), np.float32)
+    ob.data.attributes["cf_flat"].data.foreach_get("vector", flat_before)
+    bp = crease.data.splines[0].bezier_points
+    bp[0].handle_right = (0.010, 0.020, 0)
+    live.schedule_refold(ob.name)
+    assert ob.name in live._pending
+    assert live.run_pending() == {ob.name: "ok"}
+    flat_after = np.empty(2 * len(ob.data.vertices), np.float32)
+    ob.data.attributes["cf_flat"].data.foreach_get("vector", flat_after)
+    assert len(flat_after) != len(flat_before) or not np.allclose(flat_after, flat_before)
+    ob.curved_fold_mesh.live = False

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 import tomllib
 import zipfile
@@ -112,7 +113,7 @@ def test_cli_command_registered(extension, capsys, tmp_path):
 
 
 def test_disable_unregisters_cleanly_then_enable_again(extension):
-    """Runs last in this file (pytest keeps file order): disabling leaves nothing of ours behind."""
+    """Disabling leaves nothing of ours behind; enabling again restores everything (for the tests that follow)."""
     import bpy  # noqa: I001 - bpy first: it puts addon_utils on sys.path
     import addon_utils
 
@@ -131,3 +132,46 @@ def test_disable_unregisters_cleanly_then_enable_again(extension):
         assert not errors
     assert "set_crease_role" in dir(bpy.ops.curved_fold)
     assert hasattr(bpy.types.Object, "curved_fold")
+
+
+INSTALL_BUNDLED = r"""
+import sys
+import bpy  # noqa: I001
+import addon_utils
+from bl_pkg import bl_extension_cli
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+rc = bl_extension_cli.cli_extension_handler(["install-file", "-r", "user_default", "-e", sys.argv[1]])
+print("RC", rc)
+print("ENABLED", addon_utils.check("bl_ext.user_default.curved_fold")[1])
+site = bpy.utils.user_resource("EXTENSIONS", path=".local")
+print("SITE", site)
+"""
+
+
+@pytest.mark.slow
+def test_bundled_linux_zip_installs_and_extracts_the_cp311_triangle_wheel(tmp_path):
+    """Installing the self-hosted linux zip into bpy extracts only the wheel for Blender's Python (3.11)."""
+    import subprocess
+
+    try:
+        zips = tool.build_bundled(tmp_path / "dist")
+    except tool.BuildError as exc:
+        if "could not download" in str(exc):
+            pytest.skip(f"PyPI not reachable to fetch the triangle wheels: {str(exc).splitlines()[0]}")
+        raise
+    linux = next(z for z in zips if z.name.endswith("-linux_x64.zip"))
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp_path / "user"))
+    proc = subprocess.run(
+        [sys.executable, "-c", INSTALL_BUNDLED, str(linux)], capture_output=True, text=True, env=env, timeout=300
+    )
+    assert proc.returncode == 0, proc.stderr
+    lines = dict(line.split(" ", 1) for line in proc.stdout.splitlines() if line.startswith(("RC", "ENABLED", "SITE")))
+    assert lines["RC"] == "0" and lines["ENABLED"] == "True"
+    site_packages = list(Path(lines["SITE"]).glob("lib/python3.*/site-packages"))
+    assert len(site_packages) == 1
+    extracted = sorted(p.name for p in site_packages[0].iterdir())
+    assert "triangle" in extracted
+    assert any(name.startswith("triangle-20250106") and name.endswith(".dist-info") for name in extracted)
+    native = list((site_packages[0] / "triangle").glob("*.so"))
+    assert native and all("cpython-311" in p.name for p in native), [p.name for p in native]

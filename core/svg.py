@@ -518,12 +518,12 @@ def parse_path_data(d: str, where: str) -> list[tuple[list[_Raw], bool]]:
         if letter is not None:
             if letter not in "MmLlHhVvCcSsQqTtAaZz":
                 raise sc.fail(f"unknown command {letter!r}")
+            if first and letter not in "Mm":
+                raise sc.fail("path data must start with M or m")
             sc.pos += 1
             cmd = letter
         elif cmd is None or cmd in "Zz":
             raise sc.fail("expected a command letter")
-        if first and cmd not in "Mm":
-            raise sc.fail("path data must start with M or m")
         first = False
         rel = cmd.islower()
         up = cmd.upper()
@@ -870,7 +870,7 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
             if not subpaths:
                 return
             if assignment is None:
-                key = (stroke or "no stroke").strip().lower().replace(" ", "")
+                key = stroke.strip().lower().replace(" ", "") if stroke else "no stroke"
                 unknown.setdefault(key, []).append(elem.line)
                 return
             opacity = _parse_opacity(own.get("opacity"), "opacity", where)

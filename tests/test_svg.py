@@ -1,0 +1,481 @@
+"""SVG reading in Origami Simulator's convention: fixtures, every path command, transforms, units, CSS, errors."""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.etree.ElementTree as ET
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.pattern import CurveSegment, PatternError
+from curved_fold.core.svg import PX_MM, parse_svg_text, read_svg, stroke_assignment
+
+FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
+needs_fixtures = pytest.mark.skipif(not FIXTURES.is_dir(), reason=f"fixture folder {FIXTURES} is absent")
+FIXTURE_FILES = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
+
+# Independent colour table (origami-simulator-model.md §5.1), used to count the files' elements without core.svg.
+COLOUR_TABLE = {
+    **dict.fromkeys(["#000000", "#000", "black", "rgb(0,0,0)"], "B"),
+    **dict.fromkeys(["#ff0000", "#f00", "red", "rgb(255,0,0)"], "M"),
+    **dict.fromkeys(["#0000ff", "#00f", "blue", "rgb(0,0,255)"], "V"),
+    **dict.fromkeys(["#00ff00", "#0f0", "green", "rgb(0,255,0)"], "C"),
+    **dict.fromkeys(["#ffff00", "#ff0", "yellow", "rgb(255,255,0)"], "F"),
+    **dict.fromkeys(["#ff00ff", "#f0f", "magenta", "rgb(255,0,255)"], "U"),
+}
+SUBPATH = re.compile(r"[Mm][^MmZz]*?[LlHhVvCcSsQqTtAa]")
+
+
+def count_by_colour(path: Path) -> Counter:
+    """Elements (sub-paths for <path>) per assignment, by a plain ElementTree walk and regexes."""
+    counts: Counter = Counter()
+    for elem in ET.parse(path).iter():
+        tag = elem.tag.rsplit("}", 1)[-1]
+        if tag not in {"path", "line", "polyline", "polygon", "rect", "circle", "ellipse"}:
+            continue
+        stroke = elem.get("stroke")
+        style = elem.get("style", "")
+        m = re.search(r"stroke\s*:\s*([^;]+)", style)
+        if m:
+            stroke = m.group(1)
+        a = COLOUR_TABLE.get((stroke or "").strip().lower().replace(" ", ""))
+        if a is None:
+            continue
+        counts[a] += len(SUBPATH.findall(elem.get("d", ""))) if tag == "path" else 1
+    return counts
+
+
+def svg(body: str, head: str = 'viewBox="0 0 100 100" width="100mm" height="100mm"') -> str:
+    return f'<svg xmlns="http://www.w3.org/2000/svg" {head}>\n{body}\n</svg>'
+
+
+def curves_of(body: str, **kw):
+    return parse_svg_text(svg(body, **kw), "test.svg").curves
+
+
+def user(points) -> np.ndarray:
+    """User units (viewBox 0 0 100 100 on 100 mm, so 1 unit = 1 mm) → mm, y up."""
+    p = np.asarray(points, dtype=float)
+    return p * np.array([1.0, -1.0])
+
+
+# ------------------------------------------------------------------------------------------------ fixtures
+
+
+@needs_fixtures
+@pytest.mark.parametrize("path", FIXTURE_FILES, ids=lambda p: p.name)
+def test_fixture_counts_match_the_file(path: Path) -> None:
+    drawing = read_svg(path)
+    ours = Counter(c.assignment for c in drawing.curves)
+    assert ours == count_by_colour(path)
+    assert drawing.width_mm > 0 and drawing.height_mm > 0
+    for c in drawing.curves:
+        assert re.match(r"SVG <\w+( id='[^']*')?> \(line \d+\)", c.source), c.source
+        for s in c.segments:
+            assert np.all(np.isfinite(s.points))
+
+
+@needs_fixtures
+def test_fixture_counts_match_the_reference_table() -> None:
+    expected = {
+        "wavy_pleats.svg": {"B": 1, "M": 3, "V": 2},
+        "CircularPleat-antiFacet.svg": {"B": 200, "M": 700, "V": 700, "F": 1600},
+        "shell14.svg": {"B": 70, "M": 560, "V": 560, "F": 1064},
+        "Rotating_Star.svg": {"B": 1, "M": 12, "V": 24},
+        "Carved_Cylinder.svg": {"B": 1, "M": 40, "V": 40},
+        "Treble_Clef.svg": {"B": 1, "M": 1},
+    }
+    for name, counts in expected.items():
+        got = Counter(c.assignment for c in read_svg(FIXTURES / name).curves)
+        assert dict(got) == counts, name
+    huffman = Counter(c.assignment for c in read_svg(FIXTURES / "huffmanTower.svg").curves)
+    assert huffman["U"] == 13 and huffman["B"] == 12
+
+
+@needs_fixtures
+def test_fixture_fold_angles_from_opacity() -> None:
+    angles = Counter((c.assignment, c.fold_angle) for c in read_svg(FIXTURES / "shell14.svg").curves)
+    assert angles[("M", -90.0)] == 560 and angles[("V", 90.0)] == 560 and angles[("F", 0.0)] == 1064
+    assert angles[("B", None)] == 70
+    huff = {
+        (c.assignment, round(c.fold_angle, 6)) for c in read_svg(FIXTURES / "huffmanTower.svg").curves if c.fold_angle
+    }
+    assert ("V", 54.0) in huff and ("M", -54.0) in huff and ("M", round(-0.3333 * 180, 6)) in huff
+    wavy = read_svg(FIXTURES / "wavy_pleats.svg")
+    assert {c.fold_angle for c in wavy.curves if c.assignment == "M"} == {-180.0}
+    # 426.2 px wide without physical units → mm at 25.4/96
+    assert wavy.width_mm == pytest.approx(426.2 * PX_MM)
+    assert all(c.is_curved for c in wavy.curves if c.assignment != "B")
+
+
+@needs_fixtures
+def test_treble_clef_border_is_one_closed_curved_path() -> None:
+    border = [c for c in read_svg(FIXTURES / "Treble_Clef.svg").curves if c.assignment == "B"]
+    assert len(border) == 1 and border[0].closed and border[0].is_curved
+    segs = border[0].segments
+    for s0, s1 in zip(segs, segs[1:] + segs[:1], strict=True):
+        np.testing.assert_allclose(s0.points[-1], s1.points[0], atol=1e-12)
+
+
+# ------------------------------------------------------------------------------------------------ path data
+
+
+def test_move_line_horizontal_vertical_absolute_relative_and_implicit_repeats() -> None:
+    (c,) = curves_of('<path stroke="red" d="M10 10 L20 10 30 20 h5 v-5 H50 V40 l-5,5 5 5"/>')
+    pts = [c.segments[0].points[0]] + [s.points[1] for s in c.segments]
+    np.testing.assert_allclose(
+        pts, user([[10, 10], [20, 10], [30, 20], [35, 20], [35, 15], [50, 15], [50, 40], [45, 45], [50, 50]])
+    )
+    assert all(s.kind == "line" for s in c.segments) and not c.closed
+    assert c.fold_angle == -180.0 and c.assignment == "M"
+
+
+def test_relative_move_implicit_lineto_and_compact_numbers() -> None:
+    (c,) = curves_of('<path stroke="blue" d="m10-5.5.5.5l1e1,0"/>')
+    pts = [c.segments[0].points[0]] + [s.points[1] for s in c.segments]
+    np.testing.assert_allclose(pts, user([[10, -5.5], [10.5, -5], [20.5, -5]]))
+
+
+def test_cubic_and_smooth_cubic_reflect_the_control_point() -> None:
+    (c,) = curves_of('<path stroke="red" d="M0 0 C 10 0 20 10 20 20 S 30 40 40 40 s 10 -10 20 0"/>')
+    a, b, d = c.segments
+    assert a.kind == b.kind == d.kind == "cubic"
+    np.testing.assert_allclose(b.points, user([[20, 20], [20, 30], [30, 40], [40, 40]]))  # reflected (20,10)→(20,30)
+    np.testing.assert_allclose(d.points, user([[40, 40], [50, 40], [50, 30], [60, 40]]))
+
+
+def test_smooth_cubic_without_previous_cubic_uses_current_point() -> None:
+    (c,) = curves_of('<path stroke="red" d="M0 0 L10 0 S 20 10 30 0"/>')
+    np.testing.assert_allclose(c.segments[1].points, user([[10, 0], [10, 0], [20, 10], [30, 0]]))
+
+
+def test_quadratic_and_smooth_quadratic_are_exact_cubics() -> None:
+    (c,) = curves_of('<path stroke="red" d="M0 0 Q 10 20 20 0 T 40 0 t 20 0"/>')
+    q = [
+        (user([0, 0]), user([10, 20]), user([20, 0])),
+        (user([20, 0]), user([30, -20]), user([40, 0])),
+        (user([40, 0]), user([50, 20]), user([60, 0])),
+    ]
+    t = np.linspace(0, 1, 11)[:, None]
+    for seg, (p0, p1, p2) in zip(c.segments, q, strict=True):
+        exact = (1 - t) ** 2 * p0 + 2 * (1 - t) * t * p1 + t**2 * p2
+        np.testing.assert_allclose(seg.evaluate(t[:, 0]), exact, atol=1e-12)
+
+
+def test_relative_quadratic_and_relative_cubic() -> None:
+    (c,) = curves_of('<path stroke="red" d="M10 10 q 5 10 10 0 c 0 5 5 5 5 0"/>')
+    np.testing.assert_allclose(c.segments[0].evaluate(1.0), user([20, 10]))
+    np.testing.assert_allclose(c.segments[1].points, user([[20, 10], [20, 15], [25, 15], [25, 10]]))
+
+
+@pytest.mark.parametrize("large,sweep", [(0, 0), (0, 1), (1, 0), (1, 1)])
+def test_arc_endpoints_radius_and_flags(large: int, sweep: int) -> None:
+    (c,) = curves_of(f'<path stroke="red" d="M10 50 A 25 25 0 {large} {sweep} 50 50"/>')
+    (s,) = c.segments
+    assert s.kind == "arc"
+    cx, cy, rx, ry, phi, theta0, dtheta = s.arc
+    np.testing.assert_allclose(s.evaluate(np.array([0.0, 1.0])), user([[10, 50], [50, 50]]), atol=1e-12)
+    assert rx == pytest.approx(25) and ry == pytest.approx(25)
+    assert abs(dtheta) > math.pi if large else abs(dtheta) < math.pi
+    pts = s.evaluate(np.linspace(0, 1, 50))
+    np.testing.assert_allclose(np.hypot(pts[:, 0] - cx, pts[:, 1] - cy), 25, atol=1e-9)
+    # sweep=1 is clockwise on screen (y down) = clockwise seen y-up? SVG positive angle direction maps to
+    # clockwise in y-up coordinates, so dtheta < 0 after the flip.
+    assert (dtheta < 0) == bool(sweep)
+
+
+def test_arc_radii_scale_up_and_zero_radius_is_a_line() -> None:
+    cs = curves_of('<path stroke="red" d="M0 50 a 5 5 0 0 1 40 0 M 0 80 a 0 10 0 0 1 40 0"/>')
+    assert len(cs) == 2
+    arc = cs[0].segments[0]
+    assert arc.arc[2] == pytest.approx(20) and arc.arc[3] == pytest.approx(20)  # scaled up to half the chord
+    assert cs[1].segments[0].kind == "line"
+
+
+def test_arc_flags_without_separators() -> None:
+    (c,) = curves_of('<path stroke="red" d="M10 10a5 5 0 1010 0"/>')
+    np.testing.assert_allclose(c.segments[0].evaluate(1.0), user([20, 10]), atol=1e-12)
+
+
+def test_close_path_returns_to_subpath_start_and_subpaths_split() -> None:
+    cs = curves_of('<path id="p" stroke="black" d="M0 0 h10 v10 z m20 0 h10 v10 Z M50 50 l5 5"/>')
+    assert len(cs) == 3
+    assert cs[0].closed and cs[1].closed and not cs[2].closed
+    np.testing.assert_allclose(cs[0].segments[-1].points, user([[10, 10], [0, 0]]))
+    np.testing.assert_allclose(cs[1].segments[0].points[0], user([20, 0]))  # m after z is relative to the start
+    np.testing.assert_allclose(cs[1].segments[-1].points[1], user([20, 0]))
+    assert cs[2].source.endswith("subpath 3") and "<path id='p'>" in cs[2].source
+
+
+def test_straight_cubic_is_straight() -> None:
+    (c,) = curves_of('<path stroke="red" d="M0 0 C 10 10 20 20 30 30"/>')
+    assert c.segments[0].kind == "cubic" and c.segments[0].is_straight and not c.is_curved
+
+
+@pytest.mark.parametrize(
+    "d,token",
+    [
+        ("M 10 10 L 20 x", "x"),
+        ("L 10 10", "L"),
+        ("M 10 10 K 5 5", "K"),
+        ("M0 0 A 5 5 0 2 1 10 10", "2"),
+        ("M 10", "end of data"),
+    ],
+)
+def test_bad_path_data_names_element_line_and_token(d: str, token: str) -> None:
+    with pytest.raises(PatternError) as exc:
+        parse_svg_text(svg(f'<path id="bad" stroke="red" d="{d}"/>'), "t.svg")
+    msg = str(exc.value)
+    assert "<path id='bad'>" in msg and "(line 2)" in msg and repr(token) in msg
+
+
+# ------------------------------------------------------------------------------------------------ elements
+
+
+def test_line_polyline_polygon_rect() -> None:
+    cs = curves_of(
+        '<line stroke="red" x1="1" y1="2" x2="3" y2="4"/>\n'
+        '<polyline stroke="blue" points="0,0 10,0 10,10"/>\n'
+        '<polygon stroke="black" points="0 0 10 0 10 10"/>\n'
+        '<rect stroke="yellow" x="5" y="6" width="10" height="20"/>'
+    )
+    assert [c.assignment for c in cs] == ["M", "V", "B", "F"]
+    np.testing.assert_allclose(cs[0].segments[0].points, user([[1, 2], [3, 4]]))
+    assert len(cs[1].segments) == 2 and not cs[1].closed
+    assert len(cs[2].segments) == 3 and cs[2].closed
+    assert len(cs[3].segments) == 4 and cs[3].closed and cs[3].fold_angle == 0.0
+    np.testing.assert_allclose(cs[3].segments[1].points, user([[15, 6], [15, 26]]))
+    assert cs[1].source == "SVG <polyline> (line 3)"
+
+
+def test_rounded_rect_circle_ellipse_are_exact_arcs() -> None:
+    cs = curves_of(
+        '<rect stroke="black" x="10" y="10" width="40" height="20" rx="5"/>\n'
+        '<circle stroke="red" cx="50" cy="50" r="10"/>\n'
+        '<ellipse stroke="blue" cx="20" cy="70" rx="8" ry="4"/>'
+    )
+    rect, circle, ellipse = cs
+    kinds = Counter(s.kind for s in rect.segments)
+    assert kinds == {"line": 4, "arc": 4} and rect.closed
+    for a, b in zip(rect.segments, rect.segments[1:] + rect.segments[:1], strict=True):
+        np.testing.assert_allclose(a.evaluate(1.0), b.evaluate(0.0), atol=1e-12)
+    corner = rect.segments[1]
+    assert corner.arc[2] == pytest.approx(5) and corner.arc[3] == pytest.approx(5)  # ry defaults to rx
+    pts = np.concatenate([s.evaluate(np.linspace(0, 1, 40)) for s in circle.segments])
+    np.testing.assert_allclose(np.hypot(*(pts - user([50, 50])).T), 10, atol=1e-12)
+    assert circle.closed and all(s.kind == "arc" for s in circle.segments)
+    pe = np.concatenate([s.evaluate(np.linspace(0, 1, 40)) for s in ellipse.segments]) - user([20, 70])
+    np.testing.assert_allclose((pe[:, 0] / 8) ** 2 + (pe[:, 1] / 4) ** 2, 1, atol=1e-12)
+
+
+def test_defs_symbol_clip_and_metadata_contents_are_skipped() -> None:
+    cs = curves_of(
+        '<defs><path stroke="red" d="M0 0 L1 1"/></defs><symbol><line stroke="red" x2="5"/></symbol>'
+        '<clipPath><rect stroke="black" width="5" height="5"/></clipPath><metadata><line stroke="red" x2="1"/>'
+        '</metadata><line stroke="blue" x1="0" y1="0" x2="10" y2="0"/>'
+    )
+    assert [c.assignment for c in cs] == ["V"]
+
+
+# ------------------------------------------------------------------------------------------------ transforms
+
+
+def test_transforms_nested_innermost_first() -> None:
+    (c,) = curves_of(
+        '<g transform="translate(10 20)"><g transform="scale(2)"><line stroke="red" x1="1" y1="1" x2="2" y2="1" '
+        'transform="rotate(90)"/></g></g>'
+    )
+    # rotate(90): (1,1)→(-1,1), (2,1)→(-1,2); scale 2 → (-2,2),(-2,4); translate → (8,22),(8,24)
+    np.testing.assert_allclose(c.segments[0].points, user([[8, 22], [8, 24]]), atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "transform,expected",
+    [
+        ("matrix(1 2 3 4 5 6)", [1 * 1 + 3 * 2 + 5, 2 * 1 + 4 * 2 + 6]),
+        ("translate(5)", [6, 2]),
+        ("scale(2, 3)", [2, 6]),
+        ("rotate(90 1 0)", [-1, 0]),
+        ("skewX(45)", [3, 2]),
+        ("skewY(45)", [1, 3]),
+        ("translate(1,1) scale(2)", [3, 5]),
+    ],
+)
+def test_each_transform_kind(transform: str, expected: list[float]) -> None:
+    (c,) = curves_of(f'<line stroke="red" x1="1" y1="2" x2="50" y2="50" transform="{transform}"/>')
+    np.testing.assert_allclose(c.segments[0].points[0], user(expected), atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "transform", ["matrix(1 0.3 -0.5 -2 10 20)", "scale(-1 1) skewX(20)", "rotate(33) scale(2 .5)"]
+)
+def test_arc_under_any_affine_transform_is_the_exact_image(transform: str) -> None:
+    d = "M10 10 A 20 8 25 0 1 30 25"
+    (plain,) = curves_of(f'<path stroke="red" d="{d}"/>')
+    (moved,) = curves_of(f'<g transform="{transform}"><path stroke="red" d="{d}"/></g>')
+    from curved_fold.core.svg import parse_transform
+
+    m = parse_transform(transform)
+    t = np.linspace(0, 1, 33)
+    user_pts = plain.segments[0].evaluate(t) * np.array([1.0, -1.0])  # back to user units
+    expected = (user_pts @ m[:2, :2].T + m[:2, 2]) * np.array([1.0, -1.0])
+    np.testing.assert_allclose(moved.segments[0].evaluate(t), expected, atol=1e-9)
+    assert moved.segments[0].kind == "arc"
+
+
+def test_bad_transform_is_reported() -> None:
+    with pytest.raises(PatternError, match=r"<line> \(line 2\).*transform"):
+        parse_svg_text(svg('<line stroke="red" x2="1" transform="spin(3)"/>'), "t.svg")
+
+
+# ------------------------------------------------------------------------------------------------ units
+
+
+@pytest.mark.parametrize(
+    "head,scale",
+    [
+        ('viewBox="0 0 300 300" width="150mm" height="150mm"', 0.5),
+        ('viewBox="0 0 100 100" width="10cm" height="10cm"', 1.0),
+        ('viewBox="0 0 100 100" width="4in" height="4in"', 25.4 * 4 / 100),
+        ('viewBox="0 0 72 72" width="72pt" height="72pt"', 25.4 / 72),
+        ('viewBox="0 0 10 10" width="1pc" height="1pc"', 25.4 / 6 / 10),
+        ('viewBox="0 0 40 40" width="40Q" height="40Q"', 0.25),
+        ('width="300" height="300"', PX_MM),
+        ('viewBox="0 0 300 300"', PX_MM),
+        ('width="150mm" height="150mm"', PX_MM),  # no viewBox: user units are px whatever the size says
+        ('viewBox="0 0 300 300" width="300px" height="300px"', PX_MM),
+    ],
+)
+def test_units_and_viewbox(head: str, scale: float) -> None:
+    (c,) = parse_svg_text(svg('<line stroke="red" x1="0" y1="0" x2="10" y2="20"/>', head), "u.svg").curves
+    np.testing.assert_allclose(c.segments[0].points[1] - c.segments[0].points[0], [10 * scale, -20 * scale])
+
+
+def test_viewbox_origin_and_aspect_ratio_meet() -> None:
+    head = 'viewBox="10 10 100 50" width="100mm" height="100mm"'  # meet: scale 1, centred vertically (+25 mm)
+    d = parse_svg_text(svg('<line stroke="red" x1="10" y1="10" x2="110" y2="60"/>', head), "u.svg")
+    np.testing.assert_allclose(d.curves[0].segments[0].points, [[0, -25], [100, -75]])
+    assert (d.width_mm, d.height_mm) == (100, 100)
+
+
+# ------------------------------------------------------------------------------------------------ colours, CSS
+
+
+@pytest.mark.parametrize(
+    "stroke,assignment",
+    [
+        ("#f00", "M"),
+        ("#FF0000", "M"),
+        ("red", "M"),
+        ("rgb(255, 0, 0)", "M"),
+        ("rgb(100%,0%,0%)", "M"),
+        (" RED ", "M"),
+        ("#00f", "V"),
+        ("rgb(0,0,255)", "V"),
+        ("blue", "V"),
+        ("#000", "B"),
+        ("black", "B"),
+        ("lime", "C"),
+        ("green", "C"),
+        ("#0f0", "C"),
+        ("yellow", "F"),
+        ("#ff0", "F"),
+        ("magenta", "U"),
+        ("fuchsia", "U"),
+        ("#f0f", "U"),
+        ("#c80000", None),
+        ("#fe0000", None),
+        ("rgba(255,0,0,0.5)", None),
+        ("none", None),
+        ("gray", None),
+        (None, None),
+    ],
+)
+def test_exact_stroke_colour_matching(stroke, assignment) -> None:
+    assert stroke_assignment(stroke) == assignment
+
+
+def test_unknown_colours_are_skipped_with_one_warning() -> None:
+    d = parse_svg_text(
+        svg(
+            '<line stroke="#123456" x2="1"/>\n<line stroke="#123456" x2="2"/>\n<line x2="3"/>\n'
+            '<line stroke="red" x2="4"/>\n<line stroke="#123456" x2="5"/>'
+        ),
+        "w.svg",
+    )
+    assert len(d.curves) == 1
+    assert len(d.warnings) == 1
+    w = d.warnings[0]
+    assert "#123456 (3 elements: lines 2, 3, 6)" in w and "no stroke (1 element: line 4)" in w
+
+
+def test_opacity_gives_the_fold_angle() -> None:
+    cs = curves_of(
+        '<line stroke="red" opacity="0.5" x2="1"/><line stroke="blue" stroke-opacity="0.6" x2="1"/>'
+        '<line stroke="blue" opacity="0.5" stroke-opacity="0.5" x2="1"/><line stroke="red" opacity="0" x2="1"/>'
+        '<line stroke="yellow" opacity="0.3" x2="1"/><line stroke="magenta" x2="1"/><line stroke="black" x2="1"/>'
+    )
+    angles = [c.fold_angle for c in cs]
+    assert angles[:3] == [pytest.approx(-90), pytest.approx(108), pytest.approx(45)]
+    assert angles[3:] == [None, 0.0, None, None]
+
+
+def test_css_cascade_inheritance_and_precedence() -> None:
+    style = (
+        "<style>/* creases */ .m { stroke: #ff0000 } #v1, .valley { stroke: blue; stroke-opacity: .5 }"
+        " line { stroke: #000 } g.k > line { stroke: red }</style>"
+    )
+    d = parse_svg_text(
+        svg(
+            style
+            + '\n<path class="m" d="M0 0 L1 1"/>'  # class → M
+            + '\n<path id="v1" d="M0 0 L1 1"/>'  # id → V at 90°
+            + '\n<line x2="1"/>'  # type → B
+            + '\n<line class="m" x2="1"/>'  # class beats type
+            + '\n<line class="m" stroke="blue" x2="1"/>'  # CSS beats presentation attribute
+            + '\n<line class="m" style="stroke:blue" x2="1"/>'  # inline beats CSS
+            + '\n<g stroke="blue" stroke-opacity="0.5" opacity="0.1"><path d="M0 0 L1 1"/></g>'  # inherited
+        ),
+        "c.svg",
+    )
+    got = [(c.assignment, c.fold_angle) for c in d.curves]
+    assert got == [("M", -180.0), ("V", 90.0), ("B", None), ("M", -180.0), ("M", -180.0), ("V", 180.0), ("V", 90.0)]
+    assert any("g.k > line" in w for w in d.warnings)
+
+
+# ------------------------------------------------------------------------------------------------ errors
+
+
+def test_malformed_xml_names_the_line() -> None:
+    with pytest.raises(PatternError, match=r"bad\.svg: malformed XML at line 3"):
+        parse_svg_text('<svg xmlns="http://www.w3.org/2000/svg">\n<line x2="1"/>\n<path d="M0 0"\n', "bad.svg")
+
+
+def test_not_an_svg_and_empty_svg() -> None:
+    with pytest.raises(PatternError, match=r"not an SVG file \(root element is <html>"):
+        parse_svg_text("<html><body/></html>", "x.svg")
+    with pytest.raises(PatternError, match="no usable crease element"):
+        parse_svg_text(svg('<line stroke="gray" x2="1"/>'), "e.svg")
+
+
+def test_missing_file_is_a_pattern_error(tmp_path: Path) -> None:
+    with pytest.raises(PatternError, match="cannot read SVG file"):
+        read_svg(tmp_path / "missing.svg")
+
+
+def test_bad_attribute_values_are_reported() -> None:
+    with pytest.raises(PatternError, match=r"<line> \(line 2\): attribute x1='abc'"):
+        parse_svg_text(svg('<line stroke="red" x1="abc" x2="1"/>'), "t.svg")
+    with pytest.raises(PatternError, match=r"<line id='o'> \(line 2\): opacity 'half'"):
+        parse_svg_text(svg('<line id="o" stroke="red" opacity="half" x2="1"/>'), "t.svg")
+    with pytest.raises(PatternError, match="odd number of coordinates"):
+        parse_svg_text(svg('<polyline stroke="red" points="0 0 1"/>'), "t.svg")
+
+
+def test_segments_are_curve_segments() -> None:
+    (c,) = curves_of('<path stroke="red" d="M0 0 C 0 10 10 10 10 0"/>')
+    assert isinstance(c.segments[0], CurveSegment) and c.is_curved

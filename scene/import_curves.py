@@ -23,13 +23,17 @@ def curves_from_pattern(pattern: CreasePattern) -> list[CreaseCurve]:
     """Chain the straight segments of a discretised pattern into polyline :class:`CreaseCurve` s.
 
     Segments are grouped by (assignment, fold angle, source polyline) and chained through vertices of degree 2
-    within the group, so a FOLD file's discretised curve comes back as one editable curve, not hundreds.
+    within the group, so a FOLD file's discretised curve comes back as one editable curve, not hundreds. A plain
+    FOLD file (every edge its own polyline) is grouped by assignment and angle only.
     """
     from .mesh_object import chain_edges
 
     angles = np.round(np.nan_to_num(pattern.fold_angles, nan=np.inf), 9)
+    poly_ids = pattern.edge_polyline
+    if len(np.unique(poly_ids)) == len(poly_ids):  # plain FOLD: one "polyline" per edge carries no grouping
+        poly_ids = np.full(len(poly_ids), -1)
     keys = {}
-    rows = zip(pattern.assignments.tolist(), angles.tolist(), pattern.edge_polyline.tolist(), strict=True)
+    rows = zip(pattern.assignments.tolist(), angles.tolist(), poly_ids.tolist(), strict=True)
     for i, key in enumerate(rows):
         keys.setdefault(key, []).append(i)
     curves: list[CreaseCurve] = []
@@ -65,10 +69,7 @@ def read_curves(path: str | Path) -> tuple[list[CreaseCurve], list[str]]:
     if suffix == ".fold":
         from ..core import fold_format
 
-        result = fold_format.read_fold(path)
-        pattern = result if isinstance(result, CreasePattern) else getattr(result, "pattern", None)
-        if pattern is None:
-            raise PatternError(f"{path}: the FOLD reader returned no crease pattern")
+        pattern = fold_format.fold_to_pattern(fold_format.read_fold(path))
         return curves_from_pattern(pattern), list(pattern.warnings)
     raise PatternError(f"{path}: cannot import '{suffix}' files; expected one of {', '.join(SUFFIXES)}")
 

@@ -245,8 +245,10 @@ def test_export_operators_write_files_blender_reimports(folded, tmp_path):
     assert len([o for o in bpy.data.objects if o.type == "MESH"]) == 4
     import json
 
-    doc = json.loads((tmp_path / "out.fold").read_text())
-    assert len(doc.get("file_frames", [])) + 1 >= 3 or len(doc["vertices_coords"]) == len(ob.data.vertices)
+    doc = json.loads((tmp_path / "out.fold").read_text())  # one FOLD frame per baked frame
+    assert len(doc["vertices_coords"]) == len(ob.data.vertices) and len(doc["file_frames"]) == 2
+    assert len(doc["curved_fold:fold_angles"]) == len(doc["edges_vertices"])
+    assert all(len(fr["curved_fold:fold_angles"]) == len(doc["edges_vertices"]) for fr in doc["file_frames"])
 
 
 def test_import_svg_round_trip(folded, tmp_path):
@@ -270,6 +272,23 @@ def test_import_svg_round_trip(folded, tmp_path):
     refolded.data.attributes["cf_flat"].data.foreach_get("vector", flat_b)
     # SVG export shifts the sheet to its corner; sizes agree.
     np.testing.assert_allclose(np.ptp(flat_a.reshape(-1, 2), axis=0), np.ptp(flat_b.reshape(-1, 2), axis=0), atol=0.01)
+
+
+def test_import_fold_round_trip(extension, clean_scene, tmp_path):
+    border, crease = curved_pattern()
+    curves = mod(extension, "scene.curves").curves_from_objects([border, crease])
+    discretize = importlib.import_module("curved_fold.core.discretize").discretize
+    fold_format = importlib.import_module("curved_fold.core.fold_format")
+    pattern = discretize(curves)
+    fold_format.write_pattern_fold(tmp_path / "cp.fold", pattern)
+    assert bpy.ops.curved_fold.import_pattern(filepath=str(tmp_path / "cp.fold")) == {"FINISHED"}
+    imported = list(bpy.data.collections["cp"].objects)
+    assert sorted(o.curved_fold.role for o in imported) == ["BORDER", "VALLEY"]
+    again = discretize(mod(extension, "scene.curves").curves_from_objects(imported))
+    # Chords come back as straight pieces: the same vertices (re-discretising a polyline keeps its corners).
+    gap = np.linalg.norm(pattern.vertices[:, None, :] - again.vertices[None, :, :], axis=2).min(axis=1)
+    assert gap.max() < 1e-3  # mm (Blender stores float32 coordinates)
+    assert again.count("V") >= pattern.count("V") and again.count("B") >= pattern.count("B")
 
 
 def test_import_failure_leaves_scene(extension, clean_scene, tmp_path):

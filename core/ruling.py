@@ -25,6 +25,7 @@ among P's pattern segments sorted by angle: the same X1, X2 as the walk, in O(lo
 
 from __future__ import annotations
 
+import bisect
 import heapq
 import math
 from dataclasses import dataclass
@@ -61,19 +62,21 @@ class EndpointScorer:
         order = np.lexsort((ang, ends[:, 0]))
         ends, flags, ang = ends[order], flags[order], ang[order]
         start = np.searchsorted(ends[:, 0], np.arange(n + 1))
-        self._angles = [ang[start[v] : start[v + 1]] for v in range(n)]
-        self._flags = [flags[start[v] : start[v + 1]] for v in range(n)]
+        self._angles = [ang[start[v] : start[v + 1]].tolist() for v in range(n)]
+        self._flags = [flags[start[v] : start[v + 1]].tolist() for v in range(n)]
+        self._xy = self.vertices.tolist()
+        self._cost: dict[tuple[int, int], float] = {}
 
     def wedge(self, p: int, q: int) -> tuple[float, float, bool]:
         """``(θ_a, θ_b, scores)`` for edge p→q: angles from the clockwise-previous segment to pq and from pq to the
         counter-clockwise-next one; ``scores`` is False unless both are distinct curve segments."""
         angs = self._angles[p]
         k = len(angs)
-        d = self.vertices[q] - self.vertices[p]
-        a = math.atan2(d[1], d[0])
         if k == 0:
             return 0.0, 0.0, False
-        i = int(np.searchsorted(angs, a))
+        (px, py), (qx, qy) = self._xy[p], self._xy[q]
+        a = math.atan2(qy - py, qx - px)
+        i = bisect.bisect_left(angs, a)
         nxt, prv = i % k, (i - 1) % k
         two_pi = 2.0 * math.pi
         theta_a = (a - angs[prv]) % two_pi
@@ -88,18 +91,25 @@ class EndpointScorer:
 
     def cost(self, p: int, q: int) -> float:
         """E of edge pq: sum of both scores, a single score doubled, ∞ when neither endpoint scores."""
+        key = (p, q) if p < q else (q, p)
+        cached = self._cost.get(key)
+        if cached is not None:
+            return cached
         sp, sq = self.endpoint(p, q), self.endpoint(q, p)
         if sp is None and sq is None:
-            return _INF
-        if sp is None:
-            return 2.0 * sq
-        if sq is None:
-            return 2.0 * sp
-        return sp + sq
+            value = _INF
+        elif sp is None:
+            value = 2.0 * sq
+        elif sq is None:
+            value = 2.0 * sp
+        else:
+            value = sp + sq
+        self._cost[key] = value
+        return value
 
 
-def _orient(p: np.ndarray, q: np.ndarray, r: np.ndarray) -> float:
-    return float((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
+def _orient(p: list[float], q: list[float], r: list[float]) -> float:
+    return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
 
 
 def ruling_swaps(
@@ -131,6 +141,7 @@ def ruling_swaps(
     constrained = {(int(min(a, b)), int(max(a, b))) for a, b in segments.tolist()}
     scale2 = float(np.sum((vertices.max(0) - vertices.min(0)) ** 2)) or 1.0
     eps = 1e-12 * scale2
+    xy = vertices.tolist()
 
     bm = bmesh.new()
     try:
@@ -171,7 +182,7 @@ def ruling_swaps(
             if not new < scorer.cost(a, c):
                 return None
             stats["convex"] += 1
-            pa, pb, pc, pd = vertices[a], vertices[b], vertices[c], vertices[d]
+            pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
             o1, o2 = _orient(pb, pd, pa), _orient(pb, pd, pc)
             o3, o4 = _orient(pa, pc, pb), _orient(pa, pc, pd)
             if not ((o1 > eps and o2 < -eps) or (o1 < -eps and o2 > eps)):

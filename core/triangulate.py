@@ -202,8 +202,8 @@ def legalise(points: np.ndarray, tris: np.ndarray, constrained: set[tuple[int, i
             return False
         c, d = third(t1, a, b), third(t2, b, a)
         pa, pb, pc, pd = points[a], points[b], points[c], points[d]
-        # the quad a, d, b, c must be strictly convex for the flip to be valid
-        if orient(pc, pd, pa) <= 0 or orient(pd, pc, pb) <= 0:
+        # the quad a, d, b, c must be strictly convex: both new triangles (c, a, d), (d, b, c) counter-clockwise
+        if orient(pc, pa, pd) <= 0 or orient(pd, pb, pc) <= 0:
             return False
         val = float(incircle(pa, pb, pc, pd))
         if val > _TIE_TOLERANCE:

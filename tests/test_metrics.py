@@ -1,0 +1,121 @@
+"""Metrics (core.metrics) on exact folded shapes: strain, angle defect and fold-angle error vanish, warp angle is
+tiny on ruling meshes, and large where the mesh's diagonals are not rulings."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curved_fold.core import metrics
+from curved_fold.core.meshing import build_mesh
+from curved_fold.core.pattern import CreasePattern
+from tests.analytic import annular_sector, bisector_case, parabola_strip
+
+
+def test_fold_angles_sign_convention() -> None:
+    # unit square split on its diagonal, folded about it: valley (toward +z) > 0
+    verts = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    pat = CreasePattern(
+        verts,
+        [(0, 1), (1, 2), (2, 3), (3, 0), (0, 2)],
+        list("BBBBV"),
+        [np.nan] * 4 + [90.0],
+        [0, 0, 0, 0, 1],
+        [False] * 5,
+    )
+    mesh = build_mesh(pat, "cdt")
+    p = mesh.vertices_3d.copy()
+    p[1, 2] = p[3, 2] = 0.3  # both wings up: valley
+    theta = metrics.fold_angles(mesh, p)
+    crease = mesh.assignments == "V"
+    assert theta[crease][0] > 0
+    p[1, 2] = p[3, 2] = -0.3
+    assert metrics.fold_angles(mesh, p)[crease][0] < 0
+    assert np.all(np.isnan(metrics.fold_angles(mesh, p)[mesh.assignments == "B"]))
+
+
+@pytest.mark.parametrize("rho", [120.0, -90.0])
+def test_exact_bisector_shape_metrics(rho: float) -> None:
+    case = bisector_case(n_segments=96, fold_angle_deg=rho)
+    mesh = build_mesh(case.pattern, "ruling")
+    s = metrics.summary(mesh, case.folded_positions())
+    assert s["strain_max_pct"] < 1e-9
+    assert s["angle_defect_max_deg"] < 1e-9
+    assert s["fold_angle_error_max_deg"] < 1e-9
+    assert s["warp_edges"] >= 2 * 95  # every bisector counted (the quad diagonals stay flat)
+    assert s["warp_mean_deg"] < 0.01  # the central-difference tangents make it O(h²), not 0
+    # half-way folded: fold-angle error against the scaled target
+    half = case.folded_positions(rho / 2)
+    assert metrics.summary(mesh, half, percent=0.5)["fold_angle_error_max_deg"] < 1e-9
+    assert metrics.summary(mesh, half)["fold_angle_error_mean_deg"] == pytest.approx(abs(rho) / 2)
+
+
+def test_warp_is_zero_on_the_discrete_cone() -> None:
+    sec = annular_sector(40.0, 70.0, 100.0, 90.0, 108.0)
+    n = 16
+    th = np.radians(-45 + 90 * np.arange(n + 1) / n)
+    radii = (40.0, 70.0, 100.0)
+    verts = np.array([(r * np.cos(t), r * np.sin(t)) for r in radii for t in th])
+    idx = np.arange(3 * (n + 1)).reshape(3, n + 1)
+    edges, asg = [], []
+    for k, a in ((0, "B"), (1, "V"), (2, "B")):
+        edges += [(idx[k, j], idx[k, j + 1]) for j in range(n)]
+        asg += [a] * n
+    for j in (0, n):
+        edges += [(idx[0, j], idx[1, j]), (idx[1, j], idx[2, j])]
+        asg += ["B", "B"]
+    angles = [108.0 if a == "V" else np.nan for a in asg]
+    pat = CreasePattern(verts, edges, asg, angles, [0] * len(edges), [a == "V" for a in asg])
+    mesh = build_mesh(pat, "ruling")
+    radial = {(int(idx[k, j]), int(idx[k + 1, j])) for k in (0, 1) for j in range(1, n)}
+    if not radial <= set(map(tuple, mesh.edges.tolist())):
+        pytest.fail("the ruling mesh should contain the radial rungs of the cone")
+    # the discrete closed form is exact for radial rungs whatever the quad diagonals; keep only isometric ones
+    p = sec.discrete_positions(mesh.vertices, n)
+    s = metrics.summary(mesh, p)
+    assert s["strain_max_pct"] < 1e-9
+    assert s["warp_mean_deg"] < 1e-9
+    assert s["angle_defect_max_deg"] < 1e-9
+
+
+def test_parabola_exact_normals_mesh_has_small_warp_and_cdt_is_worse() -> None:
+    strip = parabola_strip(p=60.0, width=20.0, fold_angle_deg=108.0)
+    n = 48
+    xs = np.linspace(-60, 60, n + 1)
+    c = strip.crease_point(xs)
+    t = np.column_stack([np.ones_like(xs), xs / strip.p])
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    n2 = np.column_stack([-t[:, 1], t[:, 0]])
+    verts = np.concatenate([c, c + 20 * n2, c - 20 * n2])
+    cr = [(i, i + 1) for i in range(n)]
+    b = [(n + 1 + i, n + 2 + i) for i in range(n)] + [(2 * n + 2 + i, 2 * n + 3 + i) for i in range(n)]
+    b += [(0, n + 1), (0, 2 * n + 2), (n, 2 * n + 1), (n, 3 * n + 2)]
+    m = len(cr) + len(b)
+    pat = CreasePattern(
+        verts,
+        cr + b,
+        ["V"] * n + ["B"] * len(b),
+        [108.0] * n + [np.nan] * len(b),
+        [0] * n + [1] * len(b),
+        [True] * n + [False] * len(b),
+    )
+    assert pat.n_edges == m
+    mesh = build_mesh(pat, "ruling")
+    s = metrics.summary(mesh, strip.exact_positions(mesh.vertices))
+    assert s["warp_mean_deg"] < 0.01
+    assert s["strain_max_pct"] < 0.02  # chords of a curved surface: O(h²)
+
+
+def test_strain_and_defect_detect_stretching() -> None:
+    case = bisector_case(n_segments=12)
+    mesh = build_mesh(case.pattern, "cdt")
+    p = case.folded_positions()
+    p_stretched = p * np.array([1.01, 1.0, 1.0])
+    s = metrics.summary(mesh, p_stretched)
+    assert 0.1 < s["strain_mean_pct"] < 1.0
+    st = metrics.strain(mesh, p_stretched)
+    assert st.shape == (mesh.n_vertices,)
+    defect = metrics.angle_defect(mesh, p_stretched)
+    assert np.isfinite(defect).sum() == case.n_segments - 1  # only the interior crease vertices are interior
+    assert np.nanmax(np.abs(defect)) > 1e-3
+    assert np.nanmax(np.abs(metrics.angle_defect(mesh, p))) < 1e-9

@@ -1,0 +1,122 @@
+"""Ruling-aware edge swaps (core.ruling, paper §3.3) on the exact bisector case, hand-made cases and fixtures."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.meshing import build_mesh
+from curved_fold.core.ruling import EndpointScorer, ruling_swaps
+from curved_fold.core.triangulate import constrained_triangulation
+from tests.analytic import bisector_case
+
+FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
+SVGS = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
+
+
+def _edge_set(tris: np.ndarray) -> set[tuple[int, int]]:
+    s = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
+    return set(map(tuple, s.tolist()))
+
+
+def _flip(tris: np.ndarray, a: int, b: int) -> np.ndarray | None:
+    """Flip edge ab if its quad is strictly convex (test helper, independent of core.ruling)."""
+    t1 = [i for i, t in enumerate(tris.tolist()) if a in t and b in t]
+    if len(t1) != 2:
+        return None
+    c = [v for v in tris[t1[0]] if v not in (a, b)][0]
+    d = [v for v in tris[t1[1]] if v not in (a, b)][0]
+    return tris, t1, c, d
+
+
+def test_endpoint_score_is_zero_on_bisectors() -> None:
+    case = bisector_case(n_segments=10)
+    pat = case.pattern
+    scorer = EndpointScorer(pat.vertices, pat.edges, pat.edge_from_curve)
+    for i, j in sorted(case.bisector_edges):
+        assert scorer.cost(i, j) == pytest.approx(0.0, abs=1e-20)  # crease end scores 0, doubled
+        assert scorer.endpoint(j, i) is None  # border end does not score
+    n = case.n_segments
+    # a diagonal c_i – L_{i+1} scores > 0; an edge between two border vertices is ∞; crease ends do not score
+    assert scorer.cost(3, n + 1 + 4) > 1e-4
+    assert math.isinf(scorer.cost(n + 1 + 2, 2 * n + 2 + 3))
+    assert scorer.endpoint(0, n + 2) is None
+
+
+@pytest.mark.parametrize("n_segments", [12, 24, 40])
+def test_swaps_recover_exactly_the_bisectors(n_segments: int) -> None:
+    case = bisector_case(n_segments=n_segments, width_left=30.0, width_right=45.0)
+    mesh = build_mesh(case.pattern, "ruling")
+    facets = set(map(tuple, mesh.edges[mesh.assignments == "F"].tolist()))
+    assert case.bisector_edges <= facets
+    # the other facets are one diagonal per quad: no fan, no second rung
+    assert len(facets) == len(case.bisector_edges) + 2 * n_segments
+    assert np.all(mesh.signed_areas() > 0)
+
+
+def test_swaps_restore_bisectors_removed_from_the_mesh() -> None:
+    """Start from the ideal mesh with every other bisector flipped away: the swaps must put them back."""
+    case = bisector_case(n_segments=24)
+    pt = constrained_triangulation(case.pattern)
+    tris = case.ideal_triangles()
+    removed = 0
+    for i, j in sorted(case.bisector_edges)[::2]:
+        rows = [k for k, t in enumerate(tris.tolist()) if i in t and j in t]
+        c = [v for v in tris[rows[0]] if v not in (i, j)][0]
+        d = [v for v in tris[rows[1]] if v not in (i, j)][0]
+        new = tris.copy()
+        new[rows[0]] = [c, i, d]
+        new[rows[1]] = [d, j, c]
+        v = case.pattern.vertices[new[rows]]
+        area = (v[:, 1, 0] - v[:, 0, 0]) * (v[:, 2, 1] - v[:, 0, 1]) - (v[:, 1, 1] - v[:, 0, 1]) * (
+            v[:, 2, 0] - v[:, 0, 0]
+        )
+        if np.all(area < 0):
+            new[rows] = new[rows][:, [0, 2, 1]]
+            area = -area
+        if np.all(area > 0):
+            tris, removed = new, removed + 1
+    assert removed >= 8
+    assert len(case.bisector_edges & _edge_set(tris)) == len(case.bisector_edges) - removed
+    face = np.zeros(len(tris), dtype=np.int64)
+    v = case.pattern.vertices
+    face[np.mean(v[tris][:, :, 1], axis=1) < v[tris][:, :, 0].mean(axis=1) ** 2 / 120.0] = 1
+    seg = case.pattern.edges
+    res = ruling_swaps(pt.vertices, tris, face, seg, case.pattern.edge_from_curve)
+    assert res.swaps >= removed
+    assert case.bisector_edges <= _edge_set(res.triangles)
+    a, b, c = (v[res.triangles[:, k]] for k in range(3))
+    assert np.all((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) > 0)
+
+
+def _facet_valence(mesh) -> dict[tuple[int, int], int]:
+    from curved_fold.core.metrics import edge_triangles
+
+    f1, _, _, _ = edge_triangles(mesh)
+    val: dict[tuple[int, int], int] = {}
+    for (a, b), pl, t in zip(mesh.edges.tolist(), mesh.edge_polyline, f1, strict=True):
+        if pl < 0:
+            f = int(mesh.triangle_face[t])
+            val[(a, f)] = val.get((a, f), 0) + 1
+            val[(b, f)] = val.get((b, f), 0) + 1
+    return val
+
+
+@pytest.mark.skipif(not SVGS, reason=f"fixtures folder {FIXTURES} absent")
+@pytest.mark.parametrize("path", SVGS, ids=[p.name for p in SVGS])
+def test_fixture_swaps_terminate_valid_and_respect_valence(path: Path) -> None:
+    reader = pytest.importorskip("curved_fold.core.reader", reason="core.reader (INPUT helper) not available")
+    pat = reader.read_pattern(path)
+    cdt = build_mesh(pat, "cdt")
+    mesh = build_mesh(pat, "ruling")
+    assert np.all(mesh.signed_areas() > 0), "a swap inverted or flattened a triangle"
+    assert np.array_equal(np.sort(mesh.triangle_face), np.sort(cdt.triangle_face)), "faces keep their triangles"
+    before, after = _facet_valence(cdt), _facet_valence(mesh)
+    for key, count in after.items():
+        # a vertex only gains facet edges while it has at most 3 in the face, so it ends at ≤ 4 or at its CDT count
+        assert count <= max(4, before.get(key, 0)), f"vertex {key[0]} in face {key[1]} has {count} facet edges"
+    if pat.edge_from_curve.any() and mesh.swaps:
+        assert mesh.swaps > 0

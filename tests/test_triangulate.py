@@ -1,0 +1,172 @@
+"""Constrained Delaunay triangulation (core.triangulate) and the mesh builder (core.meshing), on hand-made
+patterns, the analytic cases and the Origami Simulator fixtures."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.meshing import build_mesh
+from curved_fold.core.pattern import CreasePattern, PatternError
+from curved_fold.core.triangulate import constrained_triangulation
+from tests.analytic import bisector_case
+
+FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
+SVGS = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
+
+
+def _pattern(vertices, edges, assignments, angles=None) -> CreasePattern:
+    m = len(edges)
+    angles = [np.nan if a in "BUC" else (0.0 if a == "F" else 90.0) for a in assignments] if angles is None else angles
+    return CreasePattern(vertices, edges, list(assignments), angles, list(range(m)), [False] * m)
+
+
+def _square_with_hole() -> CreasePattern:
+    outer = [(0, 0), (10, 0), (10, 10), (0, 10)]
+    inner = [(4, 4), (6, 4), (6, 6), (4, 6)]
+    edges = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4)]
+    return _pattern(outer + inner, edges, "BBBBBBBB")
+
+
+def _edge_set(tris: np.ndarray) -> set[tuple[int, int]]:
+    s = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
+    return set(map(tuple, s.tolist()))
+
+
+def _check_mesh(mesh, pattern: CreasePattern | None = None) -> None:
+    assert np.all(mesh.signed_areas() > 0), "every triangle counter-clockwise and non-degenerate"
+    assert np.all(mesh.edges[:, 0] < mesh.edges[:, 1])
+    assert len(np.unique(mesh.edges, axis=0)) == len(mesh.edges)
+    assert _edge_set(mesh.triangles) == set(map(tuple, mesh.edges.tolist()))
+    diag = mesh.edge_polyline < 0
+    assert np.all(mesh.assignments[diag] == "F") and np.all(mesh.fold_angles[diag] == 0)
+    assert np.all(np.isnan(mesh.fold_angles[np.isin(mesh.assignments, ("B", "U"))]))
+    assert len(mesh.triangle_face) == mesh.n_faces and mesh.triangle_face.max() < len(mesh.faces)
+    assert np.unique(mesh.triangles).size == mesh.n_vertices, "no unused vertex"
+    if pattern is not None:
+        assert np.count_nonzero(mesh.edge_polyline >= 0) == pattern.n_edges + pattern.count("C")
+
+
+@pytest.mark.parametrize("backend", ["triangle", "mathutils"])
+def test_hole_is_removed_and_no_steiner_points(backend: str) -> None:
+    pt = constrained_triangulation(_square_with_hole(), backend)
+    assert len(pt.vertices) == 8
+    assert len(pt.triangles) == 8  # annulus between two quads: 8 vertices, 8 triangles
+    centre = np.array([5.0, 5.0])
+    v = pt.vertices[pt.triangles]
+    bary = v.mean(axis=1)
+    assert not np.any(np.all(np.abs(bary - centre) < 1.0, axis=1)), "a triangle inside the hole"
+    assert len(pt.faces) == 1 and len(pt.face_loops[0]) == 2 and not pt.face_simple[0]
+
+
+def test_simple_face_gives_n_minus_2_triangles() -> None:
+    # a square split by a V crease: two pentagons... here two faces with 6 and 4 boundary vertices
+    verts = [(0, 0), (5, 0), (10, 0), (10, 10), (5, 10), (0, 10), (2, 5), (8, 5)]
+    edges = [(0, 1), (1, 2), (2, 3), (3, 4), (4, 5), (5, 0), (0, 6), (6, 7), (7, 3)]
+    pat = _pattern(verts, edges, "BBBBBBVVV")
+    for mesh_type in ("cdt", "earcut", "ruling"):
+        mesh = build_mesh(pat, mesh_type)
+        _check_mesh(mesh, pat)
+        for f, loop in enumerate(mesh.faces):
+            assert np.count_nonzero(mesh.triangle_face == f) == len(loop) - 2
+        # faces are CCW loops
+        for loop in mesh.faces:
+            p = mesh.vertices[loop]
+            q = np.roll(p, -1, axis=0)
+            assert np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]) > 0
+
+
+def test_dangling_crease_face() -> None:
+    verts = [(0, 0), (10, 0), (10, 10), (0, 10), (5, 0), (5, 6)]
+    edges = [(0, 4), (4, 1), (1, 2), (2, 3), (3, 0), (4, 5)]
+    pat = _pattern(verts, edges, "BBBBBV")
+    mesh = build_mesh(pat, "ruling")
+    _check_mesh(mesh, pat)
+    assert len(mesh.faces) == 1
+    assert mesh.n_faces == len(mesh.faces[0]) - 2 == 5  # the walk around the dangling crease has 7 corners
+    assert np.count_nonzero(mesh.faces[0] == 4) == 2  # the crease's foot is visited twice around the face
+
+
+def test_cut_is_split_into_two_border_edges() -> None:
+    verts = [(0, 0), (10, 0), (10, 10), (0, 10), (5, 0), (5, 6)]
+    edges = [(0, 4), (4, 1), (1, 2), (2, 3), (3, 0), (4, 5)]
+    pat = _pattern(verts, edges, "BBBBBC")
+    mesh = build_mesh(pat, "cdt")
+    _check_mesh(mesh, pat)
+    assert mesh.n_vertices == 7  # the cut's foot on the border is duplicated, its tip is not
+    assert np.count_nonzero(mesh.assignments == "B") == 5 + 2  # the 5 border segments + both sides of the cut
+    assert "C" not in set(mesh.assignments.tolist())
+
+
+def test_crossing_segments_are_reported() -> None:
+    verts = [(0, 0), (10, 0), (10, 10), (0, 10)]
+    edges = [(0, 1), (1, 2), (2, 3), (3, 0), (0, 2), (1, 3)]
+    pat = _pattern(verts, edges, "BBBBVM")
+    for backend in ("triangle", "mathutils"):
+        with pytest.raises(PatternError, match="cross"):
+            constrained_triangulation(pat, backend)
+
+
+def _grid_pattern(k: int = 6) -> CreasePattern:
+    xs = np.linspace(0, 60, k + 1)
+    verts = [(x, y) for y in xs for x in xs]
+    idx = np.arange((k + 1) ** 2).reshape(k + 1, k + 1)
+    ring = list(idx[0, :]) + list(idx[1:, -1]) + list(idx[-1, -2::-1]) + list(idx[-2:0:-1, 0])
+    edges = [(ring[i], ring[(i + 1) % len(ring)]) for i in range(len(ring))]
+    edges += [(idx[r, 0], idx[r, 1]) for r in range(1, k)]  # stubs so interior grid points are pattern vertices
+    edges += [(idx[r, j], idx[r, j + 1]) for r in range(1, k) for j in range(1, k)]
+    a = ["B"] * len(ring) + ["V"] * (len(edges) - len(ring))
+    return _pattern(verts, edges, a)
+
+
+def _circles_pattern() -> CreasePattern:
+    verts, edges, a = [], [], []
+    for r, asg in ((30.0, "B"), (20.0, "V"), (10.0, "M")):
+        base = len(verts)
+        th = np.linspace(0, 2 * np.pi, 17)[:-1]
+        verts += [(r * np.cos(t), r * np.sin(t)) for t in th]
+        edges += [(base + i, base + (i + 1) % 16) for i in range(16)]
+        a += [asg] * 16
+    return _pattern(verts, edges, a)
+
+
+@pytest.mark.parametrize("make", [_grid_pattern, _circles_pattern], ids=["grid", "concentric"])
+def test_backends_agree_on_cocircular_ties(make) -> None:
+    pat = make()
+    a = constrained_triangulation(pat, "triangle")
+    b = constrained_triangulation(pat, "mathutils")
+    assert np.array_equal(a.triangles, b.triangles)
+    assert np.array_equal(a.triangle_region, b.triangle_region)
+    for mesh_type in ("cdt", "ruling"):
+        ma, mb = build_mesh(pat, mesh_type, "triangle"), build_mesh(pat, mesh_type, "mathutils")
+        assert np.array_equal(ma.triangles, mb.triangles) and np.array_equal(ma.edges, mb.edges)
+
+
+def test_bisector_case_mesh_complete() -> None:
+    case = bisector_case()
+    for mesh_type in ("earcut", "cdt", "ruling"):
+        mesh = build_mesh(case.pattern, mesh_type)
+        _check_mesh(mesh, case.pattern)
+        assert mesh.n_faces == 4 * case.n_segments
+        assert mesh.mesh_type == mesh_type and mesh.generation_ms > 0
+        crease = mesh.assignments == "V"
+        assert np.all(mesh.fold_angles[crease] == 120.0) and np.all(mesh.edge_from_curve[crease])
+
+
+def _fixture_pattern(path: Path):
+    reader = pytest.importorskip("curved_fold.core.reader", reason="core.reader (INPUT helper) not available")
+    return reader.read_pattern(path)
+
+
+@pytest.mark.skipif(not SVGS, reason=f"fixtures folder {FIXTURES} absent")
+@pytest.mark.parametrize("path", SVGS, ids=[p.name for p in SVGS])
+def test_fixtures_mesh_and_backends_agree(path: Path) -> None:
+    pat = _fixture_pattern(path)
+    for mesh_type in ("earcut", "cdt", "ruling"):
+        mesh = build_mesh(pat, mesh_type, "triangle")
+        _check_mesh(mesh, pat)
+        if mesh_type != "earcut":
+            other = build_mesh(pat, mesh_type, "mathutils")
+            assert np.array_equal(mesh.triangles, other.triangles), f"{mesh_type} backends differ on {path.name}"

@@ -86,7 +86,7 @@ def per_node_strain_pct(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray:
     try:
         from ..core import metrics
 
-        return np.asarray(metrics.strain(mesh, positions), dtype=np.float64) * _strain_scale(metrics)
+        return 100.0 * np.asarray(metrics.strain(mesh, positions), dtype=np.float64)  # documented as a fraction
     except (ImportError, AttributeError):
         pass
     flat = mesh.vertices_3d
@@ -97,12 +97,6 @@ def per_node_strain_pct(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray:
     total = np.bincount(e.ravel(), weights=np.repeat(s, 2), minlength=mesh.n_vertices)
     deg = np.bincount(e.ravel(), minlength=mesh.n_vertices)
     return 100.0 * total / np.maximum(deg, 1)
-
-
-def _strain_scale(metrics) -> float:
-    """``core.metrics.strain`` returns fractions unless it documents percent; colours are in percent."""
-    doc = (metrics.strain.__doc__ or "").lower()
-    return 1.0 if "percent" in doc or "%" in doc else 100.0
 
 
 def warp_per_face(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray | None:

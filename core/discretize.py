@@ -490,9 +490,10 @@ def discretize(
     )
 
     # -- planar arrangement
-    verts, idx = _merge_points(np.concatenate([a, b]), merge_tolerance)
+    # interleaved (start, end, start, end, ...) so "first representative" follows the drawing order
+    verts, idx = _merge_points(np.stack([a, b], axis=1).reshape(-1, 2), merge_tolerance)
     m = len(a)
-    edges = np.column_stack([idx[:m], idx[m:]])
+    edges = idx.reshape(m, 2)
     attrs = np.arange(m)  # index into the per-segment attribute arrays
     for _ in range(4):
         keep = edges[:, 0] != edges[:, 1]

@@ -1,0 +1,304 @@
+"""Discretisation (paper §3.1) and the planar clean-up: measured accuracy, splitting, merging, fixtures."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.discretize import (
+    MAX_SEGMENTS,
+    curve_parameters,
+    default_parameters,
+    discretize,
+    sheet_size,
+)
+from curved_fold.core.pattern import CreaseCurve, CurveSegment, PatternError
+from curved_fold.core.svg import parse_svg_text, read_svg
+
+FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
+needs_fixtures = pytest.mark.skipif(not FIXTURES.is_dir(), reason=f"fixture folder {FIXTURES} is absent")
+FIXTURE_FILES = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def line(a, b) -> CurveSegment:
+    return CurveSegment("line", np.array([a, b], dtype=float))
+
+
+def square(size: float = 100.0) -> CreaseCurve:
+    c = [(0, 0), (size, 0), (size, size), (0, size)]
+    return CreaseCurve([line(c[i], c[(i + 1) % 4]) for i in range(4)], "B", None, closed=True, source="square")
+
+
+def circle(r: float, centre=(0.0, 0.0), assignment: str = "M") -> CreaseCurve:
+    cx, cy = centre
+    segs = [
+        CurveSegment("arc", np.array([[cx + r, cy], [cx - r, cy]]), (cx, cy, r, r, 0.0, 0.0, math.pi)),
+        CurveSegment("arc", np.array([[cx - r, cy], [cx + r, cy]]), (cx, cy, r, r, 0.0, math.pi, math.pi)),
+    ]
+    return CreaseCurve(segs, assignment, -90.0 if assignment == "M" else None, closed=True, source=f"circle r={r}")
+
+
+def chords(pattern) -> tuple[np.ndarray, np.ndarray]:
+    return pattern.vertices[pattern.edges[:, 0]], pattern.vertices[pattern.edges[:, 1]]
+
+
+# ------------------------------------------------------------------------------------------------ accuracy
+
+
+@pytest.mark.parametrize(
+    "r,interval,tol", [(50.0, 7.0, 0.07), (10.0, 7.0, 0.01), (200.0, 20.0, 0.5), (3.0, 1.0, 0.001)]
+)
+def test_circle_chords_stay_within_tolerance_and_interval(r: float, interval: float, tol: float) -> None:
+    p = discretize([circle(r)], interval=interval, tolerance=tol, merge_tolerance=tol / 10)
+    a, b = chords(p)
+    lengths = np.hypot(*(b - a).T)
+    assert lengths.max() <= interval * (1 + 1e-9)
+    s = np.linspace(0.0, 1.0, 101)[None, :, None]
+    dense = a[:, None, :] * (1 - s) + b[:, None, :] * s  # 101 points along every chord
+    deviation = r - np.hypot(dense[..., 0], dense[..., 1])
+    assert deviation.max() <= tol * (1 + 1e-9)
+    assert np.abs(np.hypot(*p.vertices.T) - r).max() < 1e-9  # vertices on the circle
+    # the loop is closed: every vertex has degree 2
+    assert np.all(np.bincount(p.edges.ravel()) == 2)
+    assert p.edge_from_curve.all() and set(p.assignments) == {"M"}
+    assert np.all(p.fold_angles == -90.0)
+
+
+def test_equal_parameter_count_is_the_smallest_and_refinement_meets_tolerance() -> None:
+    seg = CurveSegment("cubic", np.array([[0, 0], [10, 60], [90, -60], [100, 0]], dtype=float))
+    interval = 9.0
+    t = curve_parameters(seg, interval, tolerance=1e9)  # tolerance never binds: equal steps only
+    n = len(t) - 1
+    np.testing.assert_allclose(np.diff(t), 1.0 / n)
+    assert np.hypot(*np.diff(seg.evaluate(t), axis=0).T).max() <= interval
+    fewer = seg.evaluate(np.linspace(0, 1, n))
+    assert np.hypot(*np.diff(fewer, axis=0).T).max() > interval  # n - 1 steps would not do
+    t2 = curve_parameters(seg, interval, tolerance=0.05)
+    assert set(np.round(t, 12)) <= set(np.round(t2, 12))  # refinement only inserts
+    p = seg.evaluate(t2)
+    mid = seg.evaluate(0.5 * (t2[:-1] + t2[1:]))
+    ab = p[1:] - p[:-1]
+    u = np.clip(np.einsum("ij,ij->i", mid - p[:-1], ab) / np.einsum("ij,ij->i", ab, ab), 0, 1)
+    dist = np.hypot(*(mid - (p[:-1] + u[:, None] * ab)).T)
+    assert dist.max() <= 0.05 and len(t2) > len(t)
+
+
+def test_default_parameters_are_scale_aware() -> None:
+    assert default_parameters(150.0) == pytest.approx((7.0, 0.07, 0.05))
+    assert default_parameters(300.0) == pytest.approx((14.0, 0.14, 0.1))
+    with pytest.raises(PatternError):
+        default_parameters(0.0)
+    small = discretize([square(100.0), circle(30.0, (50, 50))])
+    big = discretize([square(1000.0), circle(300.0, (500, 500))])
+    assert small.n_edges == big.n_edges and small.n_vertices == big.n_vertices
+    np.testing.assert_allclose(big.vertices, small.vertices * 10, atol=1e-9)
+
+
+def test_sheet_size_uses_the_border() -> None:
+    assert sheet_size([square(80.0), circle(200.0, (40, 40))]) == pytest.approx(80.0)
+    assert sheet_size([circle(20.0)]) == pytest.approx(40.0, rel=1e-3)
+
+
+# ------------------------------------------------------------------------------------------------ straight parts
+
+
+def test_border_split_evenly_straight_creases_and_polylines_kept() -> None:
+    border = square(100.0)
+    crease = CreaseCurve([line((0, 50), (100, 50))], "V", 90.0, source="crease")
+    poly_pts = [(10, 10), (30, 10.001), (50, 10), (70, 10.002), (90, 10)]  # nearly collinear: must stay
+    poly = CreaseCurve([line(poly_pts[i], poly_pts[i + 1]) for i in range(4)], "M", -90.0, source="poly")
+    p = discretize([border, crease, poly], interval=7.0, tolerance=0.07, merge_tolerance=0.0001)
+    border_lengths = np.hypot(*np.subtract(*chords(p)).T)[p.assignments == "B"]
+    # each 100 mm side: ceil(100/7) = 15 pieces, but the crease's T-junctions split two of them once more
+    assert p.count("B") == 4 * 15 + 2
+    assert border_lengths.max() <= 7.0
+    assert p.count("V") == 1 and p.count("M") == 4
+    assert not p.edge_from_curve.any()
+    for q in poly_pts:
+        assert np.min(np.hypot(*(p.vertices - q).T)) < 1e-12
+
+
+def test_x_crossing_and_t_junction_are_split() -> None:
+    a = CreaseCurve([line((0, 0), (10, 10))], "M", -90.0, source="a")
+    b = CreaseCurve([line((0, 10), (10, 0))], "V", 90.0, source="b")
+    t = CreaseCurve([line((5, 5), (5, -3))], "F", 0.0, source="t")  # starts on the crossing point
+    u = CreaseCurve([line((2, 8), (-4, 8))], "U", None, source="u")  # T onto b at (2, 8)
+    p = discretize([a, b, t, u], interval=100, tolerance=1, merge_tolerance=1e-6)
+    assert Counter(p.assignments.tolist()) == {"M": 2, "V": 3, "F": 1, "U": 1}
+    centre = np.flatnonzero(np.hypot(*(p.vertices - (5, 5)).T) < 1e-9)
+    assert len(centre) == 1 and np.count_nonzero(p.edges == centre[0]) == 5
+    assert np.min(np.hypot(*(p.vertices - (2, 8)).T)) < 1e-9
+    assert {p.sources[k] for k in p.edge_polyline.tolist()} == {"a", "b", "t", "u"}
+
+
+def test_collinear_overlap_and_duplicates_keep_the_border_and_warn() -> None:
+    border = square(10.0)
+    on_border = CreaseCurve([line((2, 0), (5, 0))], "M", -90.0, source="red on border")
+    twice = CreaseCurve([line((1, 1), (9, 9))], "V", 90.0, source="valley")
+    again = CreaseCurve([line((9, 9), (1, 1))], "F", 0.0, source="facet copy")
+    p = discretize([border, on_border, twice, again], interval=100, tolerance=1, merge_tolerance=1e-6)
+    assert p.count("M") == 0 and p.count("F") == 0 and p.count("V") == 1
+    assert p.count("B") == 6  # the bottom side split at x = 2 and x = 5
+    text = " ".join(p.warnings)
+    assert "kept square (B) over red on border (M)" in text and "kept valley (V) over facet copy (F)" in text
+
+
+def test_close_vertices_merge_and_zero_length_segments_vanish() -> None:
+    a = CreaseCurve([line((0, 0), (10, 0))], "M", -90.0, source="a")
+    b = CreaseCurve([line((10.004, 0.003), (10, 10))], "V", 90.0, source="b")
+    z = CreaseCurve([line((3, 3), (3, 3))], "V", 90.0, source="zero")
+    p = discretize([a, b, z], interval=100, tolerance=1, merge_tolerance=0.01)
+    assert p.n_edges == 2 and p.n_vertices == 3
+    np.testing.assert_allclose(p.vertices[np.bincount(p.edges.ravel()) == 2][0], (10, 0))  # first one kept
+
+
+def test_crease_crossing_the_border_is_trimmed_with_a_warning() -> None:
+    crease = CreaseCurve([line((50, -2), (50, 102))], "V", 90.0, source="long crease")
+    p = discretize([square(100.0), crease], interval=10, tolerance=0.1, merge_tolerance=1e-4)
+    v = p.vertices[p.edges[p.assignments == "V"]]
+    assert p.count("V") == 1 and v[:, :, 1].min() == pytest.approx(0) and v[:, :, 1].max() == pytest.approx(100)
+    assert any("removed 2 crease segment(s) outside the border, from long crease" in w for w in p.warnings)
+
+
+def test_open_border_is_reported() -> None:
+    b = CreaseCurve([line((0, 0), (10, 0)), line((10, 0), (10, 10))], "B", None, source="half")
+    p = discretize([b], interval=100, tolerance=1)
+    assert any("border is not closed: 2 loose end(s)" in w for w in p.warnings)
+
+
+@pytest.mark.slow
+def test_explosion_is_capped_with_a_warning() -> None:
+    t0 = time.perf_counter()
+    p = discretize([circle(100.0)], interval=0.0001, tolerance=1.0)
+    assert p.n_edges <= MAX_SEGMENTS * 1.05
+    assert any("discretisation capped" in w and "interval 0.0001 mm" in w for w in p.warnings)
+    assert time.perf_counter() - t0 < 30
+
+
+def test_bad_parameters_and_input() -> None:
+    with pytest.raises(PatternError, match="interval"):
+        discretize([square()], interval=-1)
+    with pytest.raises(PatternError, match="tolerance"):
+        discretize([square()], tolerance=0)
+    with pytest.raises(PatternError, match="no curves"):
+        discretize([])
+    bad = CreaseCurve([line((0, 0), (np.nan, 1))], "M", -90.0, source="SVG <line> (line 7)")
+    with pytest.raises(PatternError, match=r"SVG <line> \(line 7\): non-finite"):
+        discretize([square(), bad])
+
+
+# ------------------------------------------------------------------------------------------------ fixtures
+
+
+@needs_fixtures
+@pytest.mark.parametrize("path", FIXTURE_FILES, ids=lambda p: p.name)
+def test_every_fixture_discretises(path: Path) -> None:
+    drawing = read_svg(path)
+    t0 = time.perf_counter()
+    p = discretize(drawing.curves)
+    ms = (time.perf_counter() - t0) * 1e3
+    p.validate()
+    assert ms < 5000
+    counts = Counter(c.assignment for c in drawing.curves)
+    assert set(p.assignments.tolist()) == set(counts)
+    lengths = np.hypot(*np.subtract(*chords(p)).T)
+    _, _, merge = default_parameters(sheet_size(drawing.curves))
+    # no drawn element is lost: a curve without pieces of its own was an exact duplicate of an existing edge
+    have = set(p.edge_polyline.tolist())
+    edge_set = {tuple(e) for e in np.sort(p.edges, axis=1).tolist()}
+    for k, c in enumerate(drawing.curves):
+        if k in have:
+            continue
+        assert len(c.segments) == 1 and c.segments[0].is_straight, c.source
+        ends = [
+            int(np.argmin(np.hypot(*(p.vertices - q).T))) for q in (c.segments[0].points[0], c.segments[0].points[-1])
+        ]
+        assert tuple(sorted(ends)) in edge_set, c.source
+    assert lengths.min() >= merge
+    assert len(np.unique(np.sort(p.edges, axis=1), axis=0)) == p.n_edges  # no duplicates
+    assert p.edge_from_curve.any() == any(c.is_curved for c in drawing.curves)
+    assert not any("not closed" in w for w in p.warnings), p.warnings
+    # curve pieces are never longer than the interval
+    interval, _, _ = default_parameters(sheet_size(drawing.curves))
+    assert lengths[p.edge_from_curve].max(initial=0) <= interval * (1 + 1e-9)
+
+
+@needs_fixtures
+def test_treble_clef_curved_border_is_one_closed_polyline() -> None:
+    p = discretize(read_svg(FIXTURES / "Treble_Clef.svg").curves)
+    border = p.edges[p.assignments == "B"]
+    assert len(border) > 100 and p.edge_from_curve[p.assignments == "B"].any()
+    deg = np.bincount(border.ravel(), minlength=p.n_vertices)
+    assert set(deg[np.unique(border)].tolist()) == {2}
+    # walk the loop: it visits every border vertex once and returns to the start
+    nbrs: dict[int, list[int]] = {}
+    for i, j in border.tolist():
+        nbrs.setdefault(i, []).append(j)
+        nbrs.setdefault(j, []).append(i)
+    start = border[0, 0]
+    prev, cur, steps = start, nbrs[start][0], 1
+    while cur != start:
+        prev, cur = cur, next(x for x in nbrs[cur] if x != prev)
+        steps += 1
+    assert steps == len(border) == len(nbrs)
+    # the mountain ends on the border: both ends of its polyline are border vertices
+    m = p.edges[p.assignments == "M"]
+    ends = np.flatnonzero(np.bincount(m.ravel(), minlength=p.n_vertices) == 1)
+    assert len(ends) == 2 and all(deg[e] == 2 for e in ends)
+
+
+@needs_fixtures
+def test_circular_pleat_radial_facets_split_at_ring_vertices() -> None:
+    p = discretize(read_svg(FIXTURES / "CircularPleat-antiFacet.svg").curves)
+    assert p.n_vertices == 1600 and p.count("M") == 700 and p.count("V") == 700 and p.count("B") == 200
+    assert p.count("F") == 3000  # 1500 ring diagonals + 100 radial lines through 15 ring vertices each
+
+
+def test_examples_end_on_the_border() -> None:
+    files = sorted(EXAMPLES.glob("*.svg"))
+    assert {f.name for f in files} >= {
+        "single_curve.svg",
+        "curved_pleats.svg",
+        "concentric_arcs.svg",
+        "curved_border.svg",
+        "cannot_fold.svg",
+    }
+    for f in files:
+        drawing = read_svg(f)
+        assert drawing.width_mm == pytest.approx(150.0)
+        p = discretize(drawing.curves)
+        assert not p.warnings, (f.name, p.warnings)
+        creases = p.edges[np.isin(p.assignments, ["M", "V"])]
+        deg = np.bincount(creases.ravel(), minlength=p.n_vertices)
+        border_deg = np.bincount(p.edges[p.assignments == "B"].ravel(), minlength=p.n_vertices)
+        assert np.all(border_deg[deg == 1] == 2), f.name  # every crease end is a border vertex
+
+
+def test_example_fold_angles() -> None:
+    p = discretize(read_svg(EXAMPLES / "single_curve.svg").curves)
+    assert set(p.fold_angles[p.assignments == "V"].round(9).tolist()) == {108.0}
+    q = discretize(read_svg(EXAMPLES / "cannot_fold.svg").curves)
+    assert q.count("V") == 0 and q.count("M") > 0
+    r = discretize(read_svg(EXAMPLES / "concentric_arcs.svg").curves)
+    assert r.count("V") > 0 and r.count("M") > 0
+
+
+def test_arc_crease_between_points_of_a_circular_border() -> None:
+    text = (
+        '<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" viewBox="0 0 100 100">'
+        '<circle cx="50" cy="50" r="45" stroke="black"/><path d="M5 50 A 60 60 0 0 1 95 50" stroke="blue"/></svg>'
+    )
+    p = discretize(parse_svg_text(text, "c.svg").curves)
+    assert p.count("V") > 5 and not p.warnings
+    assert p.edge_from_curve.all()
+    v = p.edges[p.assignments == "V"]
+    ends = np.flatnonzero(np.bincount(v.ravel(), minlength=p.n_vertices) == 1)
+    np.testing.assert_allclose(sorted(p.vertices[ends].tolist()), [[5, -50], [95, -50]], atol=1e-9)
+    border_deg = np.bincount(p.edges[p.assignments == "B"].ravel(), minlength=p.n_vertices)
+    assert np.all(border_deg[ends] == 2)

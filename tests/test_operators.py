@@ -8,6 +8,7 @@ undo restores the state, and the Live handler's detection + debounced re-fold.
 from __future__ import annotations
 
 import importlib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -136,7 +137,9 @@ def test_fold_creates_folded_mesh_and_leaves_curves(folded):
     props = ob.curved_fold_mesh
     assert ob.type == "MESH" and props.is_fold_mesh and len(me.polygons) > 10
     names = {a.name for a in me.attributes}
-    assert {"cf_flat", "cf_assignment", "cf_fold_angle", "cf_fold_angle_sim", "cf_strain", "cf_face"} <= names
+    expected = {"cf_flat", "cf_assignment", "cf_fold_angle", "cf_fold_angle_sim", "cf_strain", "cf_warp", "cf_face"}
+    assert expected <= names
+    assert me.color_attributes.active_color.name == "cf_strain"
     codes = np.empty(len(me.edges), dtype=np.int32)
     me.attributes["cf_assignment"].data.foreach_get("value", codes)
     assert np.count_nonzero(codes == 2) >= 5  # valley edges along the discretised S-curve ("V" = index 2)
@@ -316,8 +319,25 @@ def test_live_handler_detects_source_edits_and_refolds(folded, extension):
     bp[0].handle_right = (0.010, 0.020, 0)
     live.schedule_refold(ob.name)
     assert ob.name in live._pending
-    assert live.run_pending() == {ob.name: "ok"}
+    assert live.run_pending() == {ob.name: "ok"} and not live._pending
     flat_after = np.empty(2 * len(ob.data.vertices), np.float32)
     ob.data.attributes["cf_flat"].data.foreach_get("vector", flat_after)
     assert len(flat_after) != len(flat_before) or not np.allclose(flat_after, flat_before)
+    # Settings edits schedule a re-fold too (property update callbacks), but only while Live is on.
+    ob.curved_fold_mesh.fold_percent = 50.0
+    assert ob.name in live._pending
+    live._pending.clear()
     ob.curved_fold_mesh.live = False
+    ob.curved_fold_mesh.fold_percent = 40.0
+    assert not live._pending
+
+
+def test_pattern_that_cannot_fold_is_reported(extension, clean_scene):
+    """All-mountain concentric arcs (examples/cannot_fold.svg, the paper's Fig. 7 case): a clear message."""
+    svg = Path(__file__).resolve().parents[1] / "examples" / "cannot_fold.svg"
+    if not svg.exists():
+        pytest.skip(f"{svg} not there (examples/ is written by the INPUT helper)")
+    assert bpy.ops.curved_fold.import_pattern(filepath=str(svg)) == {"FINISHED"}
+    assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+    props = bpy.context.active_object.curved_fold_mesh
+    assert "does not fold as assigned" in props.last_message and props.last_fold_error > 10.0

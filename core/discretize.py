@@ -136,15 +136,9 @@ def _segment_polyline(
     """Polyline points of one drawn segment and whether they discretise a curve (see module docstring)."""
     start, end = seg.points[0], seg.points[-1]
     if seg.is_straight:
-        if assignment == "B":
-            length = float(np.hypot(*(end - start)))
-            n = max(1, math.ceil(length / interval - 1e-9))
-            s = np.linspace(0.0, 1.0, n + 1)[:, None]
-            pts = (1.0 - s) * start + s * end
-        else:
-            pts = np.array([start, end], dtype=float)
-        pts[0], pts[-1] = start, end
-        return pts, False
+        # Straight border segments are subdivided after the planar clean-up (see _subdivide_border), so their
+        # pieces are spread evenly between the junctions the designer drew and never leave slivers next to them.
+        return np.array([start, end], dtype=float), False
     t = curve_parameters(seg, interval, tolerance, budget)
     pts = seg.evaluate(t)
     pts[0], pts[-1] = start, end  # exact joints with the neighbouring segments
@@ -369,6 +363,36 @@ def _apply_splits(
     return verts, new_edges, stop_e[:-1][same]
 
 
+def _subdivide_border(
+    verts: np.ndarray, edges: np.ndarray, attrs: np.ndarray, which: np.ndarray, interval: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Split the straight border edges ``which`` (bool mask) into ⌈length / interval⌉ equal pieces (paper §3.1)."""
+    a, b = verts[edges[:, 0]], verts[edges[:, 1]]
+    length = np.hypot(*(b - a).T)
+    n = np.where(which, np.maximum(1, np.ceil(length / interval - 1e-9)).astype(np.int64), 1)
+    if np.all(n == 1):
+        return verts, edges, attrs
+    # new interior points: for edge k, parameters 1/n .. (n-1)/n
+    k_new = np.repeat(np.arange(len(edges)), n - 1)
+    step = np.arange(len(k_new)) - np.repeat(np.cumsum(n - 1) - (n - 1), n - 1) + 1
+    s = (step / n[k_new])[:, None]
+    new_pts = (1.0 - s) * a[k_new] + s * b[k_new]
+    new_ids = len(verts) + np.arange(len(k_new))
+    # chain of vertex ids per edge: start, interior..., end
+    starts = np.cumsum(n + 1) - (n + 1)
+    chain = np.empty(int((n + 1).sum()), dtype=np.int64)
+    chain[starts] = edges[:, 0]
+    chain[starts + n] = edges[:, 1]
+    interior = np.ones(len(chain), bool)
+    interior[starts] = False
+    interior[starts + n] = False
+    chain[interior] = new_ids
+    owner = np.repeat(np.arange(len(edges)), n + 1)
+    same = owner[1:] == owner[:-1]
+    new_edges = np.column_stack([chain[:-1][same], chain[1:][same]])
+    return np.concatenate([verts, new_pts]), new_edges, attrs[owner[:-1][same]]
+
+
 def _inside_border(points: np.ndarray, border_a: np.ndarray, border_b: np.ndarray) -> np.ndarray:
     """Even-odd test of points against the closed border polygon(s) given as segments (chunked, vectorised)."""
     out = np.zeros(len(points), dtype=bool)
@@ -564,6 +588,10 @@ def discretize(
                 keep = np.ones(len(edges), bool)
                 keep[outside] = False
                 edges, attrs = edges[keep], attrs[keep]
+
+    # -- straight border pieces between junctions, split evenly
+    straight_border = (assign[attrs] == "B") & ~edge_curve[attrs]
+    verts, edges, attrs = _subdivide_border(verts, edges, attrs, straight_border, interval)
 
     # -- drop stray vertices, renumber
     used = np.unique(edges)

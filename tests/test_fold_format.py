@@ -1,0 +1,259 @@
+"""FOLD reading/writing, lossless round trips, reader dispatch and atomic files."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.files import atomic_write_bytes, atomic_write_text
+from curved_fold.core.fold_format import (
+    fold_to_pattern,
+    parse_fold,
+    read_fold,
+    write_folded_fold,
+    write_pattern_fold,
+)
+from curved_fold.core.mesh import FoldMesh
+from curved_fold.core.pattern import PatternError
+from curved_fold.core.reader import read_curves, read_pattern
+
+FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
+needs_fixtures = pytest.mark.skipif(not FIXTURES.is_dir(), reason=f"fixture folder {FIXTURES} is absent")
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+SQUARE = {
+    "vertices_coords": [[0, 0], [10, 0], [10, 10], [0, 10]],
+    "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]],
+    "edges_assignment": ["B", "B", "B", "B", "V"],
+    "edges_foldAngle": [None, None, None, None, 90],
+    "faces_vertices": [[0, 1, 2], [0, 2, 3]],
+}
+
+
+def fold_text(**changes) -> str:
+    data = json.loads(json.dumps(SQUARE))
+    for k, v in changes.items():
+        if v is None:
+            data.pop(k, None)
+        else:
+            data[k] = v
+    return json.dumps(data)
+
+
+def assert_same_pattern(a, b) -> None:
+    np.testing.assert_array_equal(a.vertices, b.vertices)
+    np.testing.assert_array_equal(a.edges, b.edges)
+    np.testing.assert_array_equal(a.assignments, b.assignments)
+    np.testing.assert_array_equal(a.fold_angles, b.fold_angles)  # nan == nan for array_equal on floats
+    np.testing.assert_array_equal(a.edge_polyline, b.edge_polyline)
+    np.testing.assert_array_equal(a.edge_from_curve, b.edge_from_curve)
+    assert a.sources == b.sources
+
+
+# ------------------------------------------------------------------------------------------------ round trips
+
+
+@pytest.mark.parametrize(
+    "path",
+    [FIXTURES / "wavy_pleats.svg", FIXTURES / "huffmanTower.svg", FIXTURES / "Treble_Clef.svg"]
+    + [EXAMPLES / "curved_border.svg", EXAMPLES / "concentric_arcs.svg"],
+    ids=lambda p: p.name,
+)
+def test_svg_to_fold_and_back_is_lossless(path: Path, tmp_path: Path) -> None:
+    if not path.exists():
+        pytest.skip(f"{path} is absent")
+    pattern = read_pattern(path)
+    out = tmp_path / "p.fold"
+    written = write_pattern_fold(out, pattern)
+    assert written == out.resolve()
+    back = read_pattern(out)
+    assert_same_pattern(pattern, back)
+    data = json.loads(out.read_text())
+    assert data["frame_classes"] == ["creasePattern"] and data["frame_unit"] == "mm"
+    assert data["file_spec"] == 1.1 and len(data["curved_fold:edge_from_curve"]) == pattern.n_edges
+    # and once more through the file: byte-identical
+    out2 = tmp_path / "p2.fold"
+    write_pattern_fold(out2, back)
+    assert out2.read_bytes() == out.read_bytes()
+
+
+def square_mesh() -> FoldMesh:
+    return FoldMesh(
+        vertices=[[0, 0], [10, 0], [10, 10], [0, 10]],
+        triangles=[[0, 1, 2], [0, 2, 3]],
+        edges=[[0, 1], [1, 2], [2, 3], [0, 3], [0, 2]],
+        assignments=["B", "B", "B", "B", "V"],
+        fold_angles=[np.nan, np.nan, np.nan, np.nan, 90.0],
+        edge_from_curve=[False] * 4 + [True],
+        edge_polyline=[0, 0, 0, 0, 1],
+        triangle_face=[0, 0],
+        sources=["border", "crease"],
+        mesh_type="ruling",
+    )
+
+
+def test_folded_fold_with_frames_and_simulated_angles(tmp_path: Path) -> None:
+    mesh = square_mesh()
+    f0 = np.column_stack([mesh.vertices, np.zeros(4)])
+    f1 = f0.copy()
+    f1[3] = [5, 5, 7.0710678]
+    angles = [np.array([np.nan] * 4 + [88.5]), np.array([np.nan] * 4 + [0.0])]  # per frame: folded, flat
+    out = tmp_path / "folded.fold"
+    write_folded_fold(out, mesh, [f1, f0], angles, extra={"curved_fold:percent": 1.0})
+    data = json.loads(out.read_text())
+    assert data["frame_classes"] == ["foldedForm"] and data["faces_vertices"] == [[0, 1, 2], [0, 2, 3]]
+    assert data["vertices_coords"][3] == [5, 5, 7.0710678]
+    assert data["curved_fold:fold_angles"] == [None] * 4 + [88.5]
+    assert data["file_frames"][0]["frame_parent"] == 0 and data["file_frames"][0]["frame_inherit"] is True
+    assert data["curved_fold:percent"] == 1.0
+    doc = read_fold(out)
+    assert len(doc.frames) == 2
+    np.testing.assert_array_equal(doc.frames[0], f1)
+    np.testing.assert_array_equal(doc.frames[1], f0)
+    np.testing.assert_array_equal(doc.vertices, mesh.vertices)
+    np.testing.assert_array_equal(doc.frame_fold_angles[1], angles[1])
+    pattern = fold_to_pattern(doc)
+    assert pattern.count("V") == 1 and pattern.sources == ["border", "crease"]
+    assert pattern.edge_from_curve.tolist() == [False] * 4 + [True]
+
+
+def test_folded_fold_in_cm_and_shape_errors(tmp_path: Path) -> None:
+    mesh = square_mesh()
+    f0 = np.column_stack([mesh.vertices, np.ones(4)])
+    write_folded_fold(tmp_path / "cm.fold", mesh, [f0], unit="cm")
+    data = json.loads((tmp_path / "cm.fold").read_text())
+    assert data["vertices_coords"][1] == [1.0, 0.0, 0.1] and data["frame_unit"] == "cm"
+    doc = read_fold(tmp_path / "cm.fold")  # read back in mm
+    np.testing.assert_allclose(doc.frames[0], f0)
+    with pytest.raises(PatternError, match=r"frame 0 has shape \(3, 3\), expected \(4, 3\)"):
+        write_folded_fold(tmp_path / "x.fold", mesh, [f0[:3]])
+    with pytest.raises(PatternError, match="fold angles of frame 0 have 2 entries, mesh has 5 edges"):
+        write_folded_fold(tmp_path / "x.fold", mesh, [f0], [np.zeros(2)])
+    with pytest.raises(PatternError, match="no frame"):
+        write_folded_fold(tmp_path / "x.fold", mesh, [])
+    assert not (tmp_path / "x.fold").exists()
+
+
+# ------------------------------------------------------------------------------------------------ reading
+
+
+def test_plain_fold_reading_defaults() -> None:
+    doc = parse_fold(fold_text(edges_assignment=["b", "b", "b", "b", "m"], edges_foldAngle=None), "s.fold")
+    p = fold_to_pattern(doc)
+    assert p.assignments.tolist() == ["B", "B", "B", "B", "M"]
+    assert np.isnan(p.fold_angles).all()  # no angles given: the fold --angle option fills them
+    assert p.sources[4] == "s.fold edge 4" and p.edge_polyline.tolist() == [0, 1, 2, 3, 4]
+    assert doc.faces == [[0, 1, 2], [0, 2, 3]]
+
+
+def test_v10_spelling_3d_flat_and_units() -> None:
+    text = fold_text(
+        edges_foldAngle=None,
+        edges_foldAngles=[None, None, None, None, -45],
+        vertices_coords=[[0, 0, 0], [1, 0, 0], [1, 1, 1e-15], [0, 1, 0]],
+        frame_unit="cm",
+    )
+    doc = parse_fold(text, "v1.fold")
+    p = fold_to_pattern(doc)
+    assert p.fold_angles[4] == -45
+    np.testing.assert_allclose(p.vertices, [[0, 0], [10, 0], [10, 10], [0, 10]])
+    assert doc.frames == []
+
+
+def test_folded_3d_file_without_flat_coordinates() -> None:
+    doc = parse_fold(fold_text(vertices_coords=[[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 5]]), "f.fold")
+    assert len(doc.frames) == 1 and doc.vertices is None
+    with pytest.raises(PatternError, match="f.fold: a folded \\(3D\\) FOLD file without curved_fold:flat_coords"):
+        fold_to_pattern(doc)
+
+
+def test_file_frames_inherit_from_parent() -> None:
+    frames = [
+        {"frame_inherit": True, "frame_parent": 0, "vertices_coords": [[0, 0, 1], [10, 0, 0], [10, 10, 0], [0, 10, 0]]},
+        {"frame_inherit": True, "frame_parent": 1},
+    ]
+    doc = parse_fold(fold_text(file_frames=frames), "fr.fold")
+    assert len(doc.frames) == 2
+    np.testing.assert_array_equal(doc.frames[0], doc.frames[1])
+    assert doc.frames[1][0, 2] == 1
+
+
+@pytest.mark.parametrize(
+    "changes,message",
+    [
+        ({"vertices_coords": None}, "missing required array vertices_coords"),
+        ({"edges_assignment": None}, "missing required array edges_assignment"),
+        ({"edges_assignment": ["B"] * 4}, "edges_assignment has 4 entries but edges_vertices has 5"),
+        ({"edges_foldAngle": [0] * 6}, "edges_foldAngle has 6 entries but edges_vertices has 5"),
+        ({"edges_vertices": [[0, 1], [1, 7]]}, r"edges_vertices\[1\] = \[1, 7\]: index 7 out of range \(4 vertices\)"),
+        ({"edges_vertices": [[0, 1], [1]]}, r"edges_vertices\[1\] = \[1\]: expected 2 vertex indices"),
+        ({"edges_assignment": ["B", "B", "X", "B", "V"]}, r"edges_assignment\[2\] = 'X' is not one of"),
+        ({"faces_vertices": [[0, 1, 9]]}, r"faces_vertices\[0\] = \[0, 1, 9\]: index 9 out of range"),
+        ({"vertices_coords": [[0, 0], [1, 0], [1, "a"], [0, 1]]}, r"vertices_coords\[2\] = \[1, 'a'\]"),
+        ({"vertices_coords": [[0, 0], [1, 0], [1], [0, 1]]}, r"vertices_coords\[2\] = \[1\]"),
+        ({"edges_foldAngle": [0, 0, 0, 0, "x"]}, r"edges_foldAngle\[4\] = 'x' is not a finite number"),
+        ({"file_frames": [{"vertices_coords": [[0, 0]]}]}, r"file_frames\[0\]\.vertices_coords has 1 entries"),
+    ],
+)
+def test_fold_errors_name_the_array_and_index(changes: dict, message: str) -> None:
+    with pytest.raises(PatternError, match=message) as exc:
+        parse_fold(fold_text(**changes), "bad.fold")
+    assert str(exc.value).startswith("bad.fold: ")
+
+
+def test_non_finite_and_malformed_json() -> None:
+    text = fold_text().replace("[10, 10]", "[NaN, 10]")
+    with pytest.raises(PatternError, match=r"vertices_coords\[2\] = \[nan, 10\] has a non-finite coordinate"):
+        parse_fold(text, "n.fold")
+    with pytest.raises(PatternError, match=r"m.fold: malformed JSON at line 3, column 1"):
+        parse_fold('{"vertices_coords": [\n[0, 0],\n}', "m.fold")
+    with pytest.raises(PatternError, match="must be a JSON object"):
+        parse_fold("[1, 2]", "a.fold")
+
+
+# ------------------------------------------------------------------------------------------------ reader, files
+
+
+def test_reader_dispatch_and_errors(tmp_path: Path) -> None:
+    (tmp_path / "x.dxf").write_text("0")
+    with pytest.raises(PatternError, match=r"x.dxf: unknown file type '.dxf'; expected one of .svg, .fold, .blend"):
+        read_pattern(tmp_path / "x.dxf")
+    with pytest.raises(PatternError, match="no such file"):
+        read_pattern(tmp_path / "missing.svg")
+    fold = tmp_path / "s.fold"
+    fold.write_text(fold_text())
+    assert read_pattern(fold).count("V") == 1
+    with pytest.raises(PatternError, match="FOLD file holds straight segments only"):
+        read_curves(fold)
+    curves, warnings = read_curves(EXAMPLES / "single_curve.svg")
+    assert len(curves) == 2 and warnings == []
+    p = read_pattern(EXAMPLES / "single_curve.svg", interval=3.0, tolerance=0.01)
+    q = read_pattern(EXAMPLES / "single_curve.svg")
+    assert p.count("V") > q.count("V")
+
+
+def test_reader_passes_svg_warnings_on(tmp_path: Path) -> None:
+    f = tmp_path / "w.svg"
+    f.write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10" width="10mm" height="10mm">'
+        '<line stroke="red" x1="0" y1="0" x2="10" y2="10"/><line stroke="#abc" x2="3"/></svg>'
+    )
+    p = read_pattern(f)
+    assert p.warnings and "unknown stroke colours" in p.warnings[0] and "#abc" in p.warnings[0]
+
+
+def test_atomic_writes_replace_whole_files_and_leave_nothing_on_failure(tmp_path: Path) -> None:
+    target = tmp_path / "a.txt"
+    atomic_write_text(target, "first")
+    atomic_write_bytes(target, b"second")
+    assert target.read_bytes() == b"second"
+    assert sorted(os.listdir(tmp_path)) == ["a.txt"]
+    with pytest.raises(OSError):
+        atomic_write_text(tmp_path / "missing" / "b.txt", "x")
+    with pytest.raises(TypeError):
+        atomic_write_bytes(target, "not bytes")  # type: ignore[arg-type]
+    assert target.read_bytes() == b"second" and sorted(os.listdir(tmp_path)) == ["a.txt"]

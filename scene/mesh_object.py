@@ -321,8 +321,10 @@ def replace_fold_mesh(
         ob.data = old
         bpy.data.meshes.remove(me)
         raise
+    name = old.name
     if old.users == 0:
         bpy.data.meshes.remove(old)
+        me.name = name
 
 
 def remove_fold_object(ob: bpy.types.Object | None, me: bpy.types.Mesh | None = None) -> None:

@@ -177,6 +177,31 @@ def test_undo_restores_state_before_fold(extension, clean_scene):
     assert any(o.name.endswith("Folded") for o in bpy.data.objects)
 
 
+def test_refold_resolve_rebuild_and_failure(folded):
+    ob, _, crease = folded
+    scene = bpy.context.scene
+    full = evaluated_mm(ob)
+    scene.frame_start, scene.frame_end = 1, 3
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    ob.curved_fold_mesh.fold_percent = 30.0
+    assert bpy.ops.curved_fold.refold(rebuild="RESOLVE") == {"FINISHED"}
+    assert ob.data.shape_keys is None and ob.curved_fold_mesh.baked_frames == 0  # a stale bake is cleared
+    half = evaluated_mm(ob)
+    assert half.shape == full.shape and np.ptp(half[:, 2]) < np.ptp(full[:, 2])
+    # Rebuild from an edited source curve: a new mesh on the same object.
+    crease.data.splines[0].bezier_points[1].handle_left = (0.08, 0.03, 0)
+    name, mesh_before = ob.name, ob.data.name
+    assert bpy.ops.curved_fold.refold(rebuild="REBUILD") == {"FINISHED"}
+    assert ob.name == name and ob.data.name == mesh_before and bpy.data.meshes.get(mesh_before) is ob.data
+    # A failing re-fold (source curve out of the sheet's plane) leaves everything as it was.
+    crease.location.z = 0.01
+    bpy.context.view_layer.update()
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="Valley"):
+        bpy.ops.curved_fold.refold(rebuild="REBUILD")
+    assert snapshot() == before
+
+
 def test_bake_ten_frames_matches_solver(folded, extension):
     ob, _, _ = folded
     scene = bpy.context.scene
@@ -330,6 +355,41 @@ def test_live_handler_detects_source_edits_and_refolds(folded, extension):
     ob.curved_fold_mesh.live = False
     ob.curved_fold_mesh.fold_percent = 40.0
     assert not live._pending
+
+
+def test_depsgraph_handler_schedules_on_curve_edit(folded, extension):
+    """The registered handler itself: a real depsgraph update of a source curve queues a re-fold (debounced)."""
+    ob, _, crease = folded
+    live = mod(extension, "operators.live")
+    assert live.on_depsgraph_update in bpy.app.handlers.depsgraph_update_post
+    ob.curved_fold_mesh.live = True
+    live._pending.clear()
+    crease.data.splines[0].bezier_points[1].co.x += 0.002
+    crease.data.update_tag()
+    bpy.context.view_layer.update()  # evaluates the depsgraph: depsgraph_update_post fires
+    assert list(live._pending) == [ob.name]
+    live._pending.clear()
+    ob.data.update_tag()  # the fold object's own updates are not edits of its pattern
+    bpy.context.view_layer.update()
+    assert not live._pending
+    ob.curved_fold_mesh.live = False
+
+
+def test_fold_collection_instead_of_selection(extension, clean_scene):
+    coll = bpy.data.collections.new("Pattern")
+    bpy.context.scene.collection.children.link(coll)
+    curved_pattern(collection=coll)
+    bpy.context.view_layer.update()
+    select_only([bpy.data.objects["Valley"]])  # poll needs a crease curve selected; the collection decides
+    assert bpy.ops.curved_fold.fold(collection="Pattern", fold_percent=50.0) == {"FINISHED"}
+    ob = bpy.context.active_object
+    assert ob.curved_fold_mesh.source_collection == coll and ob.curved_fold_mesh.fold_percent == 50.0
+    assert ob.name in coll.objects  # beside its curves
+    select_only([bpy.data.objects["Valley"]])
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="no collection named 'Nope'"):
+        bpy.ops.curved_fold.fold(collection="Nope")
+    assert snapshot() == before
 
 
 def test_pattern_that_cannot_fold_is_reported(extension, clean_scene):

@@ -72,7 +72,8 @@ def build_mesh(pattern: CreasePattern, mesh_type: str = "ruling", backend: str =
             parts.append(tri_f)
             faces_of.append(np.full(len(tri_f), f, dtype=np.int64))
         tris, tface = np.concatenate(parts), np.concatenate(faces_of)
-    elif mesh_type == "ruling":
+    elif mesh_type == "ruling" and pattern.edge_from_curve[seg_index].any():
+        # without curve segments no endpoint scores, every cost is ∞ and no swap can lower it: skip the bmesh
         res = ruling_swaps(pts, tris, tface, seg_pairs, pattern.edge_from_curve[seg_index])
         tris, tface, swaps = res.triangles, res.triangle_face, res.swaps
 

@@ -49,6 +49,9 @@ ROLE_ITEMS = [
 MATERIAL_PREFIX = "Curved Fold "
 """Per-role materials are named ``"Curved Fold Mountain"`` etc. and shared by every curve of that role."""
 
+AUTO_BEVEL_KEY = "cf_auto_bevel"
+"""Custom property on a curve whose bevel was added by :func:`show_role` (removed again when the role is cleared)."""
+
 BEVEL_FRACTION = 0.004
 """Bevel given to a zero-bevel crease curve when a role is set, as a fraction of the curve's largest dimension."""
 
@@ -83,7 +86,10 @@ def _curve_size(cu: bpy.types.Curve) -> float:
 def show_role(ob: bpy.types.Object) -> None:
     """Colour ``ob`` for its role and make its curve visible in Solid mode (no-op for ``NONE`` or non-curves)."""
     role = ob.curved_fold.role
-    if role == "NONE" or ob.type != "CURVE":
+    if ob.type != "CURVE":
+        return
+    if role == "NONE":
+        _hide_role(ob)
         return
     ob.color = ROLE_COLOURS[role]
     cu = ob.data
@@ -97,8 +103,20 @@ def show_role(ob: bpy.types.Object) -> None:
     if cu.bevel_depth == 0.0 and cu.extrude == 0.0 and cu.bevel_mode == "ROUND" and cu.bevel_object is None:
         cu.bevel_depth = BEVEL_FRACTION * _curve_size(cu)
         cu.bevel_resolution = 2
+        cu[AUTO_BEVEL_KEY] = True
     if cu.dimensions == "2D":
         cu.fill_mode = "NONE"
+
+
+def _hide_role(ob: bpy.types.Object) -> None:
+    """Undo what :func:`show_role` added (role cleared): our material, the object colour, an automatic bevel."""
+    cu = ob.data
+    if len(cu.materials) and cu.materials[0] is not None and cu.materials[0].name.startswith(MATERIAL_PREFIX):
+        cu.materials.pop(index=0)
+    ob.color = (1.0, 1.0, 1.0, 1.0)
+    if cu.get(AUTO_BEVEL_KEY):
+        cu.bevel_depth = 0.0
+        del cu[AUTO_BEVEL_KEY]
 
 
 def _update_role(self: "CurvedFoldObjectProperties", context: bpy.types.Context) -> None:

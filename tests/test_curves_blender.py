@@ -318,6 +318,9 @@ def test_set_crease_role_operator_colours_and_selects(extension, clean_scene):
     assert b.data.materials[0].name == "Curved Fold Valley"
     assert bpy.ops.curved_fold.select_by_role(role="VALLEY") == {"FINISHED"}
     assert [ob.name for ob in clean_scene.objects if ob.select_get()] == ["B"]
+    # Clearing the role takes the role's colour, material and automatic bevel away again.
+    b.curved_fold.role = "NONE"
+    assert len(b.data.materials) == 0 and b.data.bevel_depth == 0.0 and tuple(b.color) == (1.0, 1.0, 1.0, 1.0)
 
 
 def test_command_line_reads_a_blend_file(mod, clean_scene, tmp_path):

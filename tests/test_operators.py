@@ -128,6 +128,23 @@ def test_operators_and_menus_registered(extension):
         assert getattr(bpy.ops.curved_fold, name).get_rna_type().description  # tooltip
     assert "UNDO" in bpy.types.CURVED_FOLD_OT_fold.bl_options
     assert hasattr(bpy.types.Object, "curved_fold_mesh")
+    imports = [f.__name__ for f in bpy.types.TOPBAR_MT_file_import._dyn_ui_initialize()]
+    exports = [f.__name__ for f in bpy.types.TOPBAR_MT_file_export._dyn_ui_initialize()]
+    assert "_menu_import" in imports and "_menu_export" in exports
+    for panel in ("fold", "mesh", "pattern", "solver", "animation", "figures"):
+        assert hasattr(bpy.types, f"VIEW3D_PT_curved_fold_{panel}")
+
+
+def test_panel_draws_only_existing_properties(extension):
+    """Every property the sidebar panels draw exists on the settings group (a typo would only show in the UI)."""
+    import re
+
+    source = Path(mod(extension, "panels.fold_panel").__file__).read_text()
+    drawn = set(re.findall(r'\.prop\(props, "(\w+)"', source))
+    for group in re.findall(r"for name in \(([^)]*)\)", source):  # the stiffness loop
+        drawn |= set(re.findall(r'"(\w+)"', group))
+    names = set(bpy.types.Object.bl_rna.properties["curved_fold_mesh"].fixed_type.bl_rna.properties.keys())
+    assert drawn and drawn <= names, drawn - names
 
 
 def test_fold_creates_folded_mesh_and_leaves_curves(folded):
@@ -240,6 +257,20 @@ def test_bake_follows_keyframed_fold_percent(folded, extension):
     pct = ops_bake.percent_schedule(ob, [1, 3, 5, 7])
     assert pct[0] == pytest.approx(0.2) and pct[2] == pytest.approx(0.6) and pct[3] == pytest.approx(0.6)
     assert 0.2 < pct[1] < 0.6
+
+
+def test_dynamic_bake_and_invoke_in_background(folded, extension):
+    """Dynamic mode (Origami Simulator's explicit steps per frame); INVOKE_DEFAULT runs execute() headless."""
+    ob, _, _ = folded
+    props = ob.curved_fold_mesh
+    props.solver_mode, props.steps_per_frame = "DYNAMIC", 50
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 4
+    assert bpy.ops.curved_fold.bake("INVOKE_DEFAULT") == {"FINISHED"}
+    assert mod(extension, "scene.bake").baked_frames(ob) == [1, 2, 3, 4]
+    scene.frame_set(4)
+    co = evaluated_mm(ob)
+    assert np.all(np.isfinite(co)) and np.ptp(co[:, 2]) > 0.1  # started moving toward the fold
 
 
 def test_modal_bake_job_is_atomic_on_cancel(folded, extension):

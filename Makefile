@@ -13,6 +13,9 @@ PYTEST    := -m pytest -q --durations=10 $(PYTEST_ARGS)
 
 .PHONY: setup test lint format build demo clean
 
+# Run $(1) with Blender's user folder (prefs, extensions) in a fresh temporary directory, removed afterwards.
+isolated = d="$$(mktemp -d)"; BLENDER_USER_RESOURCES="$$d" $(1); rc=$$?; rm -rf "$$d"; exit $$rc
+
 setup: $(STAMP)
 
 # Re-run the set-up only when the script changed or a venv is missing (second `make setup` is instant).
@@ -29,9 +32,9 @@ format: setup
 # pytest exit code 5 ("no tests collected") is non-zero, so make fails on it as on any failure.
 test: setup lint
 	@echo "== pytest on bpy 5.0.1 ($(VENV)) =="
-	BLENDER_USER_RESOURCES="$$(mktemp -d)" $(PY) $(PYTEST)
+	$(call isolated,$(PY) $(PYTEST))
 	@echo "== pytest on bpy 4.5 LTS ($(VENV_LTS)) =="
-	BLENDER_USER_RESOURCES="$$(mktemp -d)" $(PY_LTS) $(PYTEST)
+	$(call isolated,$(PY_LTS) $(PYTEST))
 
 build: setup
 	$(PY) tools/build_extension.py --bundle-triangle --out dist/

@@ -12,12 +12,18 @@ from . import _common
 
 
 def refold(
-    ob: bpy.types.Object, *, rebuild: bool | None = None, scene=None, max_iterations: int | None = None
+    ob: bpy.types.Object,
+    *,
+    rebuild: bool | None = None,
+    scene=None,
+    max_iterations: int | None = None,
+    warm_start: bool = False,
 ) -> _common.FoldOutcome:
     """Re-fold the fold object ``ob``: rebuild the mesh from its source curves (when it has sources and ``rebuild``
     is not False) or re-solve its stored mesh, then write the result. Any bake is cleared (it would be stale).
 
-    Everything is computed before anything is written; raises the engine's errors unchanged.
+    ``warm_start`` starts a re-solve from the current shape instead of the flat sheet (live edits of the fold
+    percent). Everything is computed before anything is written; raises the engine's errors unchanged.
     """
     props = ob.curved_fold_mesh
     sources = _common.source_objects(ob)
@@ -29,7 +35,12 @@ def refold(
         pattern = _common.pattern_from_objects(sources, interval=props.interval, tolerance=props.tolerance)
         out = _common.fold_from_pattern(pattern, props, max_iterations=max_iterations)
     else:
-        out = _common.resolve_stored(ob, max_iterations=max_iterations)
+        start = None
+        if warm_start:
+            co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
+            ob.data.attributes["position"].data.foreach_get("vector", co)
+            start = co.reshape(-1, 3).astype(np.float64) * mesh_object.mm_per_unit(scene)
+        out = _common.resolve_stored(ob, max_iterations=max_iterations, start=start)
     bake.clear_bake(ob)
     props.baked_frames = 0
     results = {"fold_angles_sim": out.fold_angles, "strain_pct": out.strain_pct, "warp_deg": out.warp_deg}

@@ -30,7 +30,8 @@ DEBOUNCE_S = 0.25
 LIVE_MAX_ITERATIONS = 40
 """Iteration cap of the fast solver during live re-folds (bounded work per edit)."""
 
-_pending: dict[str, float] = {}
+_pending: dict[str, tuple[float, bool]] = {}
+"""Fold objects waiting for a live re-fold: name → (time of the last request, whether the mesh must be rebuilt)."""
 _guard = {"running": False}
 
 
@@ -66,18 +67,21 @@ def fold_objects_to_refold(updated_ids, scene: bpy.types.Scene | None = None) ->
     return out
 
 
-def schedule_refold(name: str) -> None:
-    """Ask for a re-fold of the fold object ``name`` after :data:`DEBOUNCE_S` of quiet (debounced)."""
+def schedule_refold(name: str, *, rebuild: bool = True) -> None:
+    """Ask for a re-fold of the fold object ``name`` after :data:`DEBOUNCE_S` of quiet (debounced).
+
+    ``rebuild=False`` (fold percent, solver changes) only re-solves the stored mesh, warm-started from the current
+    shape; a pending rebuild is never downgraded."""
     if _guard["running"]:
         return
-    _pending[name] = time.monotonic()
+    _pending[name] = (time.monotonic(), rebuild or _pending.get(name, (0.0, False))[1])
     if not bpy.app.timers.is_registered(_timer):
         bpy.app.timers.register(_timer, first_interval=DEBOUNCE_S)
 
 
 def _timer() -> float | None:
     now = time.monotonic()
-    waiting = [t for t in _pending.values() if now - t < DEBOUNCE_S]
+    waiting = [t for t, _ in _pending.values() if now - t < DEBOUNCE_S]
     if waiting:
         return DEBOUNCE_S - (now - max(waiting))
     run_pending()
@@ -91,16 +95,16 @@ def run_pending() -> dict[str, str]:
     from . import fold
 
     results: dict[str, str] = {}
-    names = list(_pending)
+    jobs = dict(_pending)
     _pending.clear()
     _guard["running"] = True
     try:
-        for name in names:
+        for name, (_, rebuild) in jobs.items():
             ob = bpy.data.objects.get(name)
             if ob is None or not ob.curved_fold_mesh.is_fold_mesh:
                 continue
             try:
-                fold.refold(ob, max_iterations=LIVE_MAX_ITERATIONS)
+                fold.refold(ob, rebuild=None if rebuild else False, max_iterations=LIVE_MAX_ITERATIONS, warm_start=True)
                 results[name] = "ok"
             except _common.engine_errors() as exc:
                 ob.curved_fold_mesh.last_message = f"live re-fold failed: {exc}"

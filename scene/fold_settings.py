@@ -31,15 +31,25 @@ SOLVER_MODES = (
 )
 
 
-def _live_update(self, context) -> None:
-    """Property update callback: when Live is on, schedule a debounced re-fold of this object."""
+def _schedule(self, rebuild: bool) -> None:
     if not getattr(self, "live", False):
         return
     from ..operators import live  # lazy: operators import scene, not the other way round at import time
 
     owner = self.id_data
     if isinstance(owner, bpy.types.Object):
-        live.schedule_refold(owner.name)
+        live.schedule_refold(owner.name, rebuild=rebuild)
+
+
+def _live_update(self, context) -> None:
+    """Update callback of pattern settings: when Live is on, schedule a debounced re-fold with a rebuilt mesh."""
+    _schedule(self, True)
+
+
+def _live_resolve(self, context) -> None:
+    """Update callback of solve-only settings (fold percent, solver): when Live is on, schedule a debounced
+    re-solve of the stored mesh, warm-started from the current shape (cheap: no re-meshing)."""
+    _schedule(self, False)
 
 
 class CURVED_FOLD_PG_source(bpy.types.PropertyGroup):
@@ -102,7 +112,7 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
         min=0.0,
         max=100.0,
         subtype="PERCENTAGE",
-        update=_live_update,
+        update=_live_resolve,
     )
     solver: EnumProperty(
         name="Solver",
@@ -112,7 +122,7 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
         ),
         default="fast",
         description="Which solver folds the mesh",
-        update=_live_update,
+        update=_live_resolve,
     )
     solver_mode: EnumProperty(name="Bake Mode", items=SOLVER_MODES, default="QUASI_STATIC")
     steps_per_frame: IntProperty(
@@ -141,7 +151,7 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
         name="Isometric",
         description="Much stiffer bars so the paper barely stretches (strain well under 0.1 %)",
         default=False,
-        update=_live_update,
+        update=_live_resolve,
     )
     live: BoolProperty(
         name="Live",

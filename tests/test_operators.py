@@ -381,7 +381,13 @@ def test_live_handler_detects_source_edits_and_refolds(folded, extension):
     assert len(flat_after) != len(flat_before) or not np.allclose(flat_after, flat_before)
     # Settings edits schedule a re-fold too (property update callbacks), but only while Live is on.
     ob.curved_fold_mesh.fold_percent = 50.0
-    assert ob.name in live._pending
+    assert live._pending[ob.name][1] is False  # percent only: re-solve, no re-meshing
+    faces = len(ob.data.polygons)
+    assert live.run_pending() == {ob.name: "ok"}
+    assert len(ob.data.polygons) == faces and ob.curved_fold_mesh.last_iterations > 0
+    ob.curved_fold_mesh.mesh_type = "cdt"
+    ob.curved_fold_mesh.fold_percent = 60.0
+    assert live._pending[ob.name][1] is True  # a pattern setting changed: a pending rebuild is kept
     live._pending.clear()
     ob.curved_fold_mesh.live = False
     ob.curved_fold_mesh.fold_percent = 40.0

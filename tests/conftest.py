@@ -24,6 +24,11 @@ Blender-level tests ask for two fixtures::
 * ``clean_scene`` (function): ``read_homefile(use_empty=True)`` before the test (~8 ms): empty data, add-on still
   enabled. It yields ``bpy.context.scene``.
 * ``extension_zip`` (session): the path of the licence-clean zip the session built.
+* ``view3d`` (function, implies ``clean_scene``): ``window/screen/area/region`` of the 3D viewport for
+  ``bpy.context.temp_override(**view3d)`` — for operators and panels that need a 3D viewport context.
+* ``fixtures_dir`` (session): ``/work/shared/fixtures`` (skips when absent).
+* ``ext_module(extension, "scene.curves")`` (plain function, ``from .conftest import ext_module``): import a module
+  of the installed copy.
 
 Never call ``read_factory_settings`` in a test: it disables every add-on (blender-notes §2.1).
 
@@ -124,6 +129,24 @@ def clean_scene(extension):
 
     bpy.ops.wm.read_homefile(use_empty=True)
     yield bpy.context.scene
+
+
+@pytest.fixture
+def view3d(clean_scene) -> dict:
+    """Keyword arguments for ``bpy.context.temp_override(**view3d)`` that put an operator in the 3D viewport.
+
+    Headless, ``bpy.context.area`` is ``None``, so operators and panels that poll for a 3D viewport need this
+    (blender-notes §2.1); the window's VIEW_3D area and its WINDOW region are used. Misspelled keys in
+    ``temp_override`` are silently ignored, so build on this dict rather than retyping it.
+    """
+    import bpy
+
+    window = bpy.context.window_manager.windows[0]
+    area = next((a for a in window.screen.areas if a.type == "VIEW_3D"), None)
+    if area is None:
+        pytest.skip("no VIEW_3D area in the headless window")
+    region = next(r for r in area.regions if r.type == "WINDOW")
+    return {"window": window, "screen": window.screen, "area": area, "region": region}
 
 
 def ext_module(extension: ModuleType, name: str) -> ModuleType:

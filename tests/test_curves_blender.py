@@ -347,3 +347,14 @@ def test_command_line_reads_a_blend_file(mod, clean_scene, tmp_path):
     assert assignments.count("V") > 5
     xs = [v[0] for v in fold["vertices_coords"]]
     assert min(xs) == pytest.approx(0.0, abs=1e-6) and max(xs) == pytest.approx(200.0, abs=1e-6)
+
+
+def test_crease_role_panel_polls_for_the_active_curve(extension, view3d):
+    panel = bpy.types.VIEW3D_PT_curved_fold_crease_role
+    assert (panel.bl_space_type, panel.bl_region_type, panel.bl_category) == ("VIEW_3D", "UI", "Curved Fold")
+    ob = bezier_object("Active", VALLEY, role="VALLEY")
+    with bpy.context.temp_override(**view3d, active_object=ob, object=ob):
+        assert panel.poll(bpy.context)
+    mesh_ob = bpy.data.objects.new("Mesh", bpy.data.meshes.new("Mesh"))
+    with bpy.context.temp_override(**view3d, active_object=mesh_ob, object=mesh_ob):
+        assert not panel.poll(bpy.context)

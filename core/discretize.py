@@ -285,11 +285,9 @@ def _split_records(
         u = _cross(qp, r) / rxs
     da, db = t * la, u * lb
     hit = ~parallel & (da >= -tol) & (da <= la + tol) & (db >= -tol) & (db <= lb + tol)
-    in_a = hit & (da > tol) & (da < la - tol)
-    in_b = hit & (db > tol) & (db < lb - tol)
-    # A shared endpoint can only meet the other segment again if they overlap: ignore for non-parallel pairs.
-    in_a &= ~shared
-    in_b &= ~shared
+    # X crossings: inside both segments, away from every endpoint (a shared endpoint is not a crossing).
+    in_a = hit & (da > tol) & (da < la - tol) & ~shared
+    in_b = hit & (db > tol) & (db < lb - tol) & ~shared
     with np.errstate(invalid="ignore"):
         x = p + t[:, None] * r
     both = in_a & in_b
@@ -301,38 +299,21 @@ def _split_records(
         rec_e += [i[both], j[both]]
         rec_d += [da[both], db[both]]
         rec_v += [ids, ids]
-    # T: the split point is the other segment's endpoint that lies on this one.
-    ta = in_a & ~in_b
-    if ta.any():
-        near_end = db[ta] > lb[ta] / 2
-        v = np.where(near_end, edges[j[ta], 1], edges[j[ta], 0])
-        d = np.einsum("ij,ij->i", verts[v] - p[ta], r[ta]) / la[ta]
-        rec_e.append(i[ta])
-        rec_d.append(d)
-        rec_v.append(v)
-    tb = in_b & ~in_a
-    if tb.any():
-        near_end = da[tb] > la[tb] / 2
-        v = np.where(near_end, edges[i[tb], 1], edges[i[tb], 0])
-        d = np.einsum("ij,ij->i", verts[v] - q[tb], s[tb]) / lb[tb]
-        rec_e.append(j[tb])
-        rec_d.append(d)
-        rec_v.append(v)
-    # --- collinear overlaps: split each segment at the other's endpoints lying inside it
-    col = parallel & (np.abs(_cross(r, qp)) <= tol * np.maximum(la, 1e-300))
-    if col.any():
-        for seg_idx, other_idx, base, dirv, length in (
-            (i[col], j[col], p[col], r[col], la[col]),
-            (j[col], i[col], q[col], s[col], lb[col]),
-        ):
-            for end in (0, 1):
-                v = edges[other_idx, end]
-                d = np.einsum("ij,ij->i", verts[v] - base, dirv) / np.maximum(length, 1e-300)
-                off = np.abs(_cross(dirv, verts[v] - base)) / np.maximum(length, 1e-300)
-                inside = (d > tol) & (d < length - tol) & (off <= tol)
-                rec_e.append(seg_idx[inside])
-                rec_d.append(d[inside])
-                rec_v.append(v[inside])
+    # T-junctions (and collinear overlaps): an endpoint of one segment within tol of the other's interior splits
+    # the other at that endpoint. Checked directly, not through the line intersection, so nearly parallel
+    # segments are caught too.
+    for seg_idx, other_idx, base, dirv, length in ((i, j, p, r, la), (j, i, q, s, lb)):
+        safe = np.maximum(length, 1e-300)
+        for end in (0, 1):
+            v = edges[other_idx, end]
+            rel = verts[v] - base
+            d = np.einsum("ij,ij->i", rel, dirv) / safe
+            off = np.abs(_cross(dirv, rel)) / safe
+            own = (v == edges[seg_idx, 0]) | (v == edges[seg_idx, 1])
+            inside = (d > tol) & (d < length - tol) & (off <= tol) & ~own
+            rec_e.append(seg_idx[inside])
+            rec_d.append(d[inside])
+            rec_v.append(v[inside])
     if not rec_e:
         z = np.zeros(0, np.int64)
         return z, np.zeros(0), z, np.zeros((0, 2))
@@ -531,6 +512,11 @@ def discretize(
         edges = idx[edges]
     keep = edges[:, 0] != edges[:, 1]
     edges, attrs = edges[keep], attrs[keep]
+    if len(edges) == 0:
+        raise PatternError(
+            f"crease pattern: every segment is shorter than the merge tolerance {merge_tolerance:g} mm "
+            f"(sources: {_describe_sources(sources, edge_poly)})"
+        )
 
     # -- duplicates: keep the highest-priority assignment, warn when they disagree
     key = np.sort(edges, axis=1)

@@ -302,3 +302,69 @@ def test_arc_crease_between_points_of_a_circular_border() -> None:
     np.testing.assert_allclose(sorted(p.vertices[ends].tolist()), [[5, -50], [95, -50]], atol=1e-9)
     border_deg = np.bincount(p.edges[p.assignments == "B"].ravel(), minlength=p.n_vertices)
     assert np.all(border_deg[ends] == 2)
+
+
+# ------------------------------------------------------------------------------------------------ properties
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+coord = st.floats(min_value=-100, max_value=100, allow_nan=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    pts=st.lists(st.tuples(coord, coord), min_size=4, max_size=4),
+    interval=st.floats(min_value=1.0, max_value=30.0),
+    tolerance=st.floats(min_value=0.005, max_value=2.0),
+)
+def test_any_cubic_meets_interval_and_tolerance(pts, interval, tolerance) -> None:
+    seg = CurveSegment("cubic", np.array(pts, dtype=float))
+    t = curve_parameters(seg, interval, tolerance)
+    assert t[0] == 0.0 and t[-1] == 1.0 and np.all(np.diff(t) > 0)
+    p = seg.evaluate(t)
+    assert np.hypot(*np.diff(p, axis=0).T).max() <= interval * (1 + 1e-9)
+    mid = seg.evaluate(0.5 * (t[:-1] + t[1:]))
+    ab = p[1:] - p[:-1]
+    ll = np.einsum("ij,ij->i", ab, ab)
+    u = np.clip(np.einsum("ij,ij->i", mid - p[:-1], ab) / np.where(ll > 0, ll, 1), 0, 1)
+    dist = np.hypot(*(mid - (p[:-1] + u[:, None] * ab)).T)
+    assert dist.max() <= tolerance
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    lines=st.lists(st.tuples(coord, coord, coord, coord), min_size=2, max_size=25),
+)
+def test_random_segments_become_a_planar_graph(lines) -> None:
+    """After the clean-up no two segments cross or overlap, and no vertex lies inside another segment."""
+    curves = [
+        CreaseCurve([line((x0, y0), (x1, y1))], "M" if k % 2 else "V", 90.0, source=f"l{k}")
+        for k, (x0, y0, x1, y1) in enumerate(lines)
+    ]
+    tol = 1e-3
+    try:
+        p = discretize(curves, interval=1000, tolerance=1, merge_tolerance=tol)
+    except PatternError:
+        return  # every segment degenerate
+    a, b = chords(p)
+    r = b - a
+    length = np.hypot(*r.T)
+    assert length.min() >= tol
+    # no vertex strictly inside a segment (farther than tol from both ends, closer than tol/10 to the line)
+    v = p.vertices
+    rel = v[None, :, :] - a[:, None, :]
+    along = np.einsum("evk,ek->ev", rel, r) / length[:, None]
+    off = np.abs(r[:, None, 0] * rel[..., 1] - r[:, None, 1] * rel[..., 0]) / length[:, None]
+    inside = (along > 2 * tol) & (along < length[:, None] - 2 * tol) & (off < tol / 10)
+    assert not inside.any()
+    # no proper crossings between segments that share no vertex
+    i, j = np.triu_indices(len(a), 1)
+    share = (p.edges[i][:, :, None] == p.edges[j][:, None, :]).any(axis=(1, 2))
+    d1 = np.cross(r[i], a[j] - a[i])
+    d2 = np.cross(r[i], b[j] - a[i])
+    d3 = np.cross(r[j], a[i] - a[j])
+    d4 = np.cross(r[j], b[i] - a[j])
+    margin = 1e-6 * (length[i] * length[j])
+    crossing = (d1 * d2 < -(margin**2)) & (d3 * d4 < -(margin**2)) & ~share
+    assert not crossing.any()

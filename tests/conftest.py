@@ -39,6 +39,7 @@ leak in and nothing is written to ``~/.config/blender``.
 
 from __future__ import annotations
 
+import atexit
 import importlib
 import importlib.util
 import os
@@ -58,8 +59,9 @@ REPO_MODULE = "cf_pytest"
 """Module name of the throw-away extension repository the session installs into."""
 EXTENSION_ID = "curved_fold"
 
-_USER_RESOURCES_OWNED = "BLENDER_USER_RESOURCES" not in os.environ
-os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="curved_fold_user_"))
+if "BLENDER_USER_RESOURCES" not in os.environ:
+    os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="curved_fold_user_")
+    atexit.register(shutil.rmtree, os.environ["BLENDER_USER_RESOURCES"], True)
 
 
 def load_build_tool() -> ModuleType:
@@ -111,8 +113,6 @@ def extension(extension_zip: Path, tmp_path_factory: pytest.TempPathFactory):
     finally:
         if addon_utils.check(module_name)[1]:
             addon_utils.disable(module_name, default_set=True)
-        if _USER_RESOURCES_OWNED:
-            shutil.rmtree(os.environ["BLENDER_USER_RESOURCES"], ignore_errors=True)
 
 
 def extension_repository():

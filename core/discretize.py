@@ -11,11 +11,14 @@ Steps, in order:
    kept vertex for vertex (nearly collinear vertices are never removed: that would destroy flattened curves).
 3. **Planar arrangement.** Vertices closer than ``merge_tolerance`` are merged (into the first representative, as
    Origami Simulator does; border vertices come first so the outline never moves); crossing segments (X) and
-   endpoints lying on another segment (T) are split at the intersection; zero-length and duplicate segments are
+   endpoints lying on another segment (T) are split at the intersection (a computed crossing within
+   :data:`SNAP_FACTOR` merge tolerances of an existing vertex snaps to it); zero-length and duplicate segments are
    removed. Candidate pairs come from a uniform grid over the segments' bounding boxes, so the work grows with the
    number of nearby pairs, not with E².
 4. **Outside pieces.** If the border is closed, crease pieces lying outside it (creases drawn slightly past the
    edge of the sheet) are removed, with a warning.
+5. **Border pieces.** Straight border edges, now running between the junctions the designer drew, are split into
+   ⌈length / interval⌉ equal pieces (so no sliver is left beside a junction).
 
 Defaults follow the paper (150 mm sheet: interval 7 mm, tolerance 0.07 mm) and are **scale-aware**: multiplied by
 sheet size / 150 mm, where the sheet size is the largest extent of the border's bounding box (of all curves if
@@ -49,6 +52,14 @@ MERGE_PER_150 = 0.05
 Our own curve chords go down to ≈ sqrt(8·tolerance·radius) (0.3 mm on a 0.2 mm-radius bend at the default
 tolerance). 0.05 mm per 150 mm is below every one of them (20 % margin on shell14) yet far above float noise,
 so endpoints that designers snapped by eye in drawing programs (typically within 0.01 mm) are still welded.
+"""
+
+SNAP_FACTOR = 4.0
+"""A computed crossing point within this many merge tolerances of an existing vertex is snapped to that vertex.
+
+Drawn vertices are merged only at the merge tolerance (so short drawn segments survive), but crossing points are
+derived: lines drawn "through" a junction miss it by a hair (``curvedPleatSimple``'s facet lines pass 0.1 px from
+its centre) and would otherwise leave a cluster of sliver segments there.
 """
 
 MAX_SEGMENTS = 200_000
@@ -202,6 +213,37 @@ def _merge_points(pts: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
     return u[keep_idx], new_index[rep][inv]
 
 
+def _nearest_within(verts: np.ndarray, pts: np.ndarray, radius: float) -> np.ndarray:
+    """Index of the nearest vertex within ``radius`` of each point, or -1 (hash grid of cell ``radius``)."""
+    out = np.full(len(pts), -1, dtype=np.int64)
+    if radius <= 0 or len(pts) == 0 or len(verts) == 0:
+        return out
+    origin = np.minimum(verts.min(axis=0), pts.min(axis=0))
+    vc = np.floor((verts - origin) / radius).astype(np.int64)
+    pc = np.floor((pts - origin) / radius).astype(np.int64)
+    width = int(max(vc[:, 1].max(), pc[:, 1].max())) + 3
+    vcode = vc[:, 0] * width + vc[:, 1]
+    srt = np.argsort(vcode, kind="stable")
+    vcode_s = vcode[srt]
+    best = np.full(len(pts), np.inf)
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            target = (pc[:, 0] + dx) * width + pc[:, 1] + dy
+            lo = np.searchsorted(vcode_s, target, "left")
+            hi = np.searchsorted(vcode_s, target, "right")
+            cnt = hi - lo
+            if not cnt.any():
+                continue
+            pi = np.repeat(np.arange(len(pts)), cnt)
+            vi = srt[np.repeat(lo, cnt) + np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)]
+            dist = np.hypot(*(verts[vi] - pts[pi]).T)
+            ok = dist < radius
+            for p_, v_, d_ in zip(pi[ok].tolist(), vi[ok].tolist(), dist[ok].tolist(), strict=True):
+                if d_ < best[p_]:
+                    best[p_], out[p_] = d_, v_
+    return out
+
+
 def _candidate_pairs(a: np.ndarray, b: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Pairs (i < j) of segments whose tol-expanded bounding boxes overlap, via a uniform grid."""
     m = len(a)
@@ -293,12 +335,24 @@ def _split_records(
     both = in_a & in_b
     k = int(both.sum())
     if k:
-        new_pts.append(x[both])
-        ids = -1 - (n_new + np.arange(k))
-        n_new += k
-        rec_e += [i[both], j[both]]
-        rec_d += [da[both], db[both]]
-        rec_v += [ids, ids]
+        # A computed crossing next to an existing vertex (lines drawn "through" a junction that miss it by a
+        # hair) snaps to that vertex instead of making a cluster of new ones: within SNAP_FACTOR × tol.
+        xb = x[both]
+        snap = _nearest_within(verts, xb, SNAP_FACTOR * tol)
+        fresh = snap < 0
+        ids = snap.copy()
+        ids[fresh] = -1 - (n_new + np.arange(int(fresh.sum())))
+        n_new += int(fresh.sum())
+        new_pts.append(xb[fresh])
+        ib, jb = i[both], j[both]
+        d_i = np.where(fresh, da[both], np.einsum("ij,ij->i", verts[np.maximum(snap, 0)] - p[both], r[both]) / la[both])
+        d_j = np.where(fresh, db[both], np.einsum("ij,ij->i", verts[np.maximum(snap, 0)] - q[both], s[both]) / lb[both])
+        # never split a segment at one of its own endpoints
+        own_i = (snap == edges[ib, 0]) | (snap == edges[ib, 1])
+        own_j = (snap == edges[jb, 0]) | (snap == edges[jb, 1])
+        rec_e += [ib[~own_i], jb[~own_j]]
+        rec_d += [d_i[~own_i], d_j[~own_j]]
+        rec_v += [ids[~own_i], ids[~own_j]]
     # T-junctions (and collinear overlaps): an endpoint of one segment within tol of the other's interior splits
     # the other at that endpoint. Checked directly, not through the line intersection, so nearly parallel
     # segments are caught too.

@@ -368,3 +368,28 @@ def test_random_segments_become_a_planar_graph(lines) -> None:
     margin = 1e-6 * (length[i] * length[j])
     crossing = (d1 * d2 < -(margin**2)) & (d3 * d4 < -(margin**2)) & ~share
     assert not crossing.any()
+
+
+def test_lines_through_a_junction_that_miss_it_by_a_hair_snap_to_it() -> None:
+    hub = (50.0, 50.0)
+    spokes = [
+        CreaseCurve([line(hub, (50 + 40 * math.cos(a), 50 + 40 * math.sin(a)))], "M", -90.0, source=f"s{k}")
+        for k, a in enumerate((0.3, 2.0, 4.0))
+    ]
+    # two long facet lines meant to pass through the hub, off by 0.01 mm (merge tolerance 0.005 mm)
+    f1 = CreaseCurve([line((10, 10.01), (90, 90.01))], "F", 0.0, source="f1")
+    f2 = CreaseCurve([line((10, 89.99), (90, 9.99))], "F", 0.0, source="f2")
+    p = discretize([*spokes, f1, f2], interval=100, tolerance=1, merge_tolerance=0.005)
+    lengths = np.hypot(*np.subtract(*chords(p)).T)
+    assert lengths.min() > 30  # no slivers at the hub
+    assert p.count("F") == 4 and p.count("M") == 3 and p.n_vertices == 8
+    h = int(np.argmin(np.hypot(*(p.vertices - hub).T)))
+    np.testing.assert_array_equal(p.vertices[h], hub)  # the drawn junction keeps its place
+    assert np.count_nonzero(p.edges == h) == 7
+
+
+@needs_fixtures
+def test_curved_pleat_simple_hub_is_clean() -> None:
+    p = discretize(read_svg(FIXTURES / "curvedPleatSimple.svg").curves)
+    assert (p.count("M"), p.count("V"), p.count("F")) == (1, 1, 14)
+    assert not p.warnings

@@ -109,7 +109,7 @@ def warp_per_face(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray | None:
         return None
     if len(w) == mesh.n_faces or len(w) == mesh.n_vertices:
         return w
-    if len(w) == len(mesh.edges):  # per edge: spread to the triangles that share the edge (max)
+    if len(w) == len(mesh.edges):  # per edge: each triangle gets the mean of its counted sides (0 if none)
         n = mesh.n_vertices
         keys = mesh.edges[:, 0] * n + mesh.edges[:, 1]
         order = np.argsort(keys)
@@ -117,7 +117,9 @@ def warp_per_face(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray | None:
         sides = np.sort(np.stack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]], axis=1), axis=2)
         sk = sides[..., 0] * n + sides[..., 1]
         idx = order[np.searchsorted(keys[order], sk)]
-        return np.nanmax(np.where(np.isfinite(w[idx]), w[idx], 0.0), axis=1)
+        vals = w[idx]
+        finite = np.isfinite(vals)
+        return np.where(finite, vals, 0.0).sum(axis=1) / np.maximum(finite.sum(axis=1), 1)
     return None
 
 

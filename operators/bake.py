@@ -122,14 +122,10 @@ class BakeJob:
             warp_deg=_common.warp_per_face(self.mesh, self.positions[-1]),
         )
         me = ob.data
-        for name, values, domain, clip in (
-            ("cf_strain", out.strain_pct, "POINT", mesh_object.STRAIN_CLIP_PCT),
-            ("cf_warp", out.warp_deg, None, mesh_object.WARP_CLIP_DEG),
-        ):
-            if values is None:
-                continue
-            dom = domain or ("FACE" if len(values) == self.mesh.n_faces else "POINT")
-            mesh_object._set_attr(me, name, "FLOAT_COLOR", dom, mesh_object.heat_colours(values, clip), "color")
+        if out.strain_pct is not None:
+            mesh_object.write_colours(me, "cf_strain", out.strain_pct, mesh_object.STRAIN_CLIP_PCT)
+        if out.warp_deg is not None:
+            mesh_object.write_colours(me, "cf_warp", out.warp_deg, mesh_object.WARP_CLIP_DEG)
         return ob
 
     def summary(self) -> str:

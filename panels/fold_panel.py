@@ -158,7 +158,10 @@ class VIEW3D_PT_curved_fold_figures(bpy.types.Panel):
             split = col.split(factor=0.35)
             split.label(text=label)
             split.label(text=value)
-        self.layout.label(text="Viewport: Attribute colour cf_strain / cf_warp", icon="INFO")
+        row = self.layout.row(align=True)
+        row.operator("curved_fold.show_colours", text="Strain").kind = "STRAIN"
+        row.operator("curved_fold.show_colours", text="Warp").kind = "WARP"
+        row.operator("curved_fold.show_colours", text="", icon="MATERIAL").kind = "NONE"
 
 
 CLASSES = (

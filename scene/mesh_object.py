@@ -8,8 +8,9 @@ The object carries the whole flat pattern as attributes, so re-folding and bakin
 * ``cf_fold_angle_sim`` (FLOAT, edge): simulated fold angle of the last run
 * ``cf_from_curve`` (BOOLEAN, edge), ``cf_polyline`` (INT, edge): which edges discretise a drawn curve/stroke
 * ``cf_face`` (INT, face): crease-pattern face each triangle belongs to
-* ``cf_strain`` / ``cf_warp`` (FLOAT_COLOR, point / face): Origami Simulator's strain colours and warp angle
-  colours, for the viewport's Attribute colour mode; ``cf_strain_pct`` / ``cf_warp_deg`` hold the raw values.
+* ``cf_strain`` / ``cf_warp`` (FLOAT_COLOR, point / corner): Origami Simulator's strain colours and warp angle
+  colours (flat per triangle), for the viewport's Attribute colour mode; ``cf_strain_pct`` (point) and
+  ``cf_warp_deg`` (face) hold the raw values.
 
 Crease edges are shown as two child curve objects (``<name> Mountain`` in red, ``<name> Valley`` in blue, a small
 bevel so they render in Solid, Workbench and Cycles alike); they follow every re-fold and every baked frame.
@@ -34,7 +35,7 @@ CREASE_COLOURS = {"M": (1.0, 0.0, 0.0, 1.0), "V": (0.0, 0.1, 1.0, 1.0)}
 STRAIN_CLIP_PCT = 5.0
 """Strain (percent) at which the strain colour saturates to red (Origami Simulator's ``strainClip``)."""
 
-WARP_CLIP_DEG = 5.0
+WARP_CLIP_DEG = 10.0
 """Warp angle (degrees) at which the warp colour saturates to red."""
 
 _EDGE_ATTRS = ("cf_assignment", "cf_fold_angle", "cf_fold_angle_sim", "cf_from_curve", "cf_polyline")
@@ -415,12 +416,12 @@ def write_results(
     if strain_pct is not None:
         s = np.asarray(strain_pct, dtype=np.float64).reshape(-1)
         _set_attr(me, "cf_strain_pct", "FLOAT", "POINT", s.astype(np.float32), "value")
-        _set_attr(me, "cf_strain", "FLOAT_COLOR", "POINT", heat_colours(s, STRAIN_CLIP_PCT), "color")
+        write_colours(me, "cf_strain", s, STRAIN_CLIP_PCT)
     if warp_deg is not None:
         w = np.asarray(warp_deg, dtype=np.float64).reshape(-1)
         domain = "FACE" if len(w) == mesh.n_faces else "POINT"
         _set_attr(me, "cf_warp_deg", "FLOAT", domain, w.astype(np.float32), "value")
-        _set_attr(me, "cf_warp", "FLOAT_COLOR", domain, heat_colours(w, WARP_CLIP_DEG), "color")
+        write_colours(me, "cf_warp", w, WARP_CLIP_DEG)
     if me.color_attributes.get("cf_strain") is not None and me.color_attributes.active_color is None:
         me.color_attributes.active_color = me.color_attributes["cf_strain"]
     co = np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene)
@@ -429,6 +430,21 @@ def write_results(
     if not _crease_curve_objects(ob) or ob.get("cf_crease_topology") != _topology_key(mesh):
         _write_crease_curves(ob, mesh, co)
         ob["cf_crease_topology"] = _topology_key(mesh)
+
+
+def write_colours(me: bpy.types.Mesh, name: str, values: np.ndarray, clip: float) -> None:
+    """Write per-vertex or per-triangle ``values`` as a FLOAT_COLOR colour attribute the viewport can show.
+
+    Per-triangle values go to the CORNER domain (each triangle's three corners), because face-domain colours are
+    not colour attributes in Blender and cannot be displayed."""
+    v = np.asarray(values, dtype=np.float64).reshape(-1)
+    colours = heat_colours(v, clip)
+    if len(v) == len(me.vertices):
+        _set_attr(me, name, "FLOAT_COLOR", "POINT", colours, "color")
+    elif len(v) == len(me.polygons) and len(me.loops) == 3 * len(me.polygons):
+        _set_attr(me, name, "FLOAT_COLOR", "CORNER", np.repeat(colours, 3, axis=0), "color")
+    else:
+        raise ValueError(f"mesh '{me.name}': {len(v)} values for '{name}' match neither vertices nor triangles")
 
 
 def _topology_key(mesh: FoldMesh) -> str:

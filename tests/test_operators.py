@@ -169,6 +169,16 @@ def test_fold_creates_folded_mesh_and_leaves_curves(folded):
     assert before_curves == (tuple(crease.data.splines[0].bezier_points[0].co), "VALLEY")
 
 
+def test_show_colours_sets_attribute_and_viewports(folded):
+    ob, _, _ = folded
+    assert bpy.ops.curved_fold.show_colours(kind="WARP") == {"FINISHED"}
+    assert ob.data.color_attributes.active_color.name == "cf_warp"
+    views = [s for a in bpy.context.screen.areas for s in a.spaces if s.type == "VIEW_3D"]
+    assert views and all(v.shading.color_type == "VERTEX" for v in views)
+    assert bpy.ops.curved_fold.show_colours(kind="NONE") == {"FINISHED"}
+    assert all(v.shading.color_type == "MATERIAL" for v in views)
+
+
 def test_failing_fold_leaves_scene_exactly_as_before(extension, clean_scene):
     border, crease = curved_pattern()
     crease.location.z = 0.01  # out of the sheet's plane: curves_from_objects refuses, naming the curve

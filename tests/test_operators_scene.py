@@ -89,10 +89,24 @@ def test_create_fold_object_writes_attributes_and_reads_back(empty_scene):
     mesh = grid_mesh()
     pos = folded(mesh, 1.0)
     strain = np.linspace(0, 10, mesh.n_vertices)
+    warp = np.linspace(0, 6, mesh.n_faces)
     ob = mesh_object.create_fold_object(
-        mesh, pos, "Fold", empty_scene.collection, fold_angles_sim=mesh.fold_angles * 0.5, strain_pct=strain
+        mesh,
+        pos,
+        "Fold",
+        empty_scene.collection,
+        fold_angles_sim=mesh.fold_angles * 0.5,
+        strain_pct=strain,
+        warp_deg=warp,
     )
     me = ob.data
+    # Warp colours are per triangle on its corners (face-domain colours cannot be shown by the viewport).
+    cw = me.color_attributes["cf_warp"]
+    assert cw.domain == "CORNER" and me.color_attributes["cf_strain"].domain == "POINT"
+    corner = np.empty(4 * len(me.loops), dtype=np.float32)
+    cw.data.foreach_get("color", corner)
+    corner = corner.reshape(-1, 3, 4)
+    assert np.all(corner[:, 0] == corner[:, 2]) and corner[0, 0, 2] > 0.9 and corner[-1, 0, 0] > 0.9
     assert (len(me.vertices), len(me.edges), len(me.polygons)) == (mesh.n_vertices, len(mesh.edges), mesh.n_faces)
     np.testing.assert_allclose(evaluated_positions_mm(ob), pos, atol=1e-3)
     back = mesh_object.read_fold_mesh(ob)

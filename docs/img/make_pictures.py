@@ -4,8 +4,8 @@ Runs headless through the add-on's own operators (Import Crease Pattern, Fold, R
 
     .venv/bin/python docs/img/make_pictures.py [pattern.svg]
 
-writes ``docs/img/fold_percent.png`` and ``docs/img/strain.png`` (Workbench, 1 sample per pixel, no GPU needed
-beyond Mesa's llvmpipe). The default pattern is Origami Simulator's ``wavy_pleats.svg`` from the shared fixtures.
+writes ``docs/img/fold_percent.png``, ``docs/img/strain.png`` and ``docs/img/warp.png`` (Workbench, 8× AA; no GPU
+needed beyond Mesa's llvmpipe). The default pattern is Origami Simulator's ``wavy_pleats.svg`` from the shared fixtures.
 """
 
 from __future__ import annotations
@@ -110,6 +110,8 @@ def main(pattern: Path) -> None:
     me = folds[-1].data
     me.color_attributes.active_color = me.color_attributes["cf_strain"]
     render(HERE / "strain.png", "VERTEX", width=900, height=650)
+    me.color_attributes.active_color = me.color_attributes["cf_warp"]  # warp angle per triangle, blue 0° → red 10°
+    render(HERE / "warp.png", "VERTEX", width=900, height=650)
 
 
 if __name__ == "__main__":

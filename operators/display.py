@@ -1,0 +1,70 @@
+"""Show the strain or warp-angle colours of the active folded mesh in the 3D viewports (Solid mode, Attribute
+colour), or go back to material colours: one click instead of three viewport settings."""
+
+from __future__ import annotations
+
+import bpy
+from bpy.props import EnumProperty
+
+ATTRIBUTES = {"STRAIN": "cf_strain", "WARP": "cf_warp"}
+
+
+def show_colours(ob: bpy.types.Object, kind: str, screens) -> int:
+    """Make ``cf_strain``/``cf_warp`` the active colour attribute of ``ob`` and switch every 3D viewport of
+    ``screens`` to Solid + Attribute colour (``kind="NONE"``: back to Material colour). Returns the viewports set."""
+    if kind != "NONE":
+        name = ATTRIBUTES[kind]
+        attr = ob.data.color_attributes.get(name)
+        if attr is None:
+            raise ValueError(f"'{ob.name}' has no '{name}' colours: fold it first")
+        ob.data.color_attributes.active_color = attr
+    count = 0
+    for screen in screens:
+        for area in screen.areas:
+            for space in area.spaces:
+                if space.type == "VIEW_3D":
+                    space.shading.type = "SOLID"
+                    space.shading.color_type = "MATERIAL" if kind == "NONE" else "VERTEX"
+                    count += 1
+    return count
+
+
+class CURVED_FOLD_OT_show_colours(bpy.types.Operator):
+    """Show strain or warp-angle colours of the active folded mesh in the viewport"""
+
+    bl_idname = "curved_fold.show_colours"
+    bl_label = "Show Fold Colours"
+    bl_description = (
+        "Colour the active folded mesh by strain (Origami Simulator's map: blue 0 → red 5 %) or warp angle "
+        "(blue 0° → red 10°) in the 3D viewports, or go back to material colours"
+    )
+    bl_options = {"REGISTER", "UNDO"}
+
+    kind: EnumProperty(
+        name="Colours",
+        items=(
+            ("STRAIN", "Strain", "Per-vertex strain, Origami Simulator's colour map"),
+            ("WARP", "Warp Angle", "Per-face warp angle (ruling alignment; the paper's quality measure)"),
+            ("NONE", "Material", "Back to material colours"),
+        ),
+        default="STRAIN",
+    )
+
+    @classmethod
+    def poll(cls, context):
+        ob = context.active_object
+        return ob is not None and ob.type == "MESH" and ob.curved_fold_mesh.is_fold_mesh
+
+    def execute(self, context):
+        ob = context.active_object
+        screens = [w.screen for w in context.window_manager.windows if w.screen is not None]
+        try:
+            n = show_colours(ob, self.kind, screens)
+        except ValueError as exc:
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"'{ob.name}': {self.kind.lower()} colours in {n} viewport(s)")
+        return {"FINISHED"}
+
+
+CLASSES = (CURVED_FOLD_OT_show_colours,)

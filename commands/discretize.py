@@ -32,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``discretize``; returns the exit code."""
     import time
 
-    from ..core.discretize import default_parameters, sheet_size
+    from ..core.discretize import default_parameters, discretize, sheet_size
     from ..core.fold_format import write_pattern_fold
     from ..core.reader import read_curves, read_pattern
 
@@ -45,13 +45,18 @@ def run(args: argparse.Namespace) -> int:
         if value is not None and not value > 0:
             raise PatternError(f"--{name} {value:g}: must be a positive number of mm")
     t0 = time.perf_counter()
-    pattern = read_pattern(path, interval=args.interval, tolerance=args.tolerance, merge_tolerance=args.merge)
+    is_fold = path.suffix.lower() == ".fold"
+    if is_fold:
+        pattern = read_pattern(path)
+    else:
+        curves, warnings = read_curves(path)
+        pattern = discretize(curves, interval=args.interval, tolerance=args.tolerance, merge_tolerance=args.merge)
+        pattern.warnings = warnings + pattern.warnings
     ms = (time.perf_counter() - t0) * 1e3
     print(f"read {path} ({ms:.0f} ms)")
-    if path.suffix.lower() == ".fold":
+    if is_fold:
         print("parameters: none (a FOLD file is already straight segments)")
     else:
-        curves, _ = read_curves(path)
         size = sheet_size(curves)
         defaults = dict(zip(("interval", "tolerance", "merge"), default_parameters(size), strict=True))
         basis = "the border" if any(c.assignment == "B" for c in curves) else "all curves (no border)"

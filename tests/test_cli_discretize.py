@@ -82,3 +82,12 @@ def test_malformed_svg_exits_2(tmp_path: Path) -> None:
     res = run(str(bad), "--out", str(tmp_path / "o.fold"))
     assert res.returncode == 2 and "bad.svg: malformed XML at line 2, column 1: unclosed token" in res.stderr
     assert not (tmp_path / "o.fold").exists()
+
+
+def test_fold_input_is_copied_through(tmp_path: Path) -> None:
+    first, second = tmp_path / "a.fold", tmp_path / "b.fold"
+    assert run(str(EXAMPLES / "concentric_arcs.svg"), "--out", str(first)).returncode == 0
+    res = run(str(first), "--out", str(second))
+    assert res.returncode == 0, res.stderr
+    assert "parameters: none (a FOLD file is already straight segments)" in res.stdout
+    assert second.read_bytes() == first.read_bytes()

@@ -818,11 +818,10 @@ def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float]:
 # ----------------------------------------------------------------------------------------------------- reading
 
 
-def _describe(elem: _Element, source_name: str) -> str:
+def _describe(elem: _Element) -> str:
     ident = elem.attrib.get("id")
     tag = f"<{elem.tag} id='{ident}'>" if ident else f"<{elem.tag}>"
-    prefix = f"SVG {tag}" if not source_name else f"SVG {tag}"
-    return f"{prefix} (line {elem.line})"
+    return f"SVG {tag} (line {elem.line})"
 
 
 def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
@@ -850,7 +849,7 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
     def visit(elem: _Element, matrix: np.ndarray, inherited: dict[str, str]) -> None:
         if elem.tag.startswith("#foreign:") or elem.tag in SKIPPED_CONTAINERS:
             return
-        where = _describe(elem, source_name)
+        where = _describe(elem)
         own = _own_style(elem, rules)
         style = dict(inherited)
         for key in INHERITED:

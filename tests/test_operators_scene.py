@@ -89,7 +89,7 @@ def test_create_fold_object_writes_attributes_and_reads_back(empty_scene):
     mesh = grid_mesh()
     pos = folded(mesh, 1.0)
     strain = np.linspace(0, 10, mesh.n_vertices)
-    warp = np.linspace(0, 6, mesh.n_faces)
+    warp = np.linspace(0, 2 * mesh_object.WARP_CLIP_DEG, mesh.n_faces)
     ob = mesh_object.create_fold_object(
         mesh,
         pos,

@@ -47,8 +47,17 @@ def _rows_dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", u, v)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of ``(m, 3)`` arrays (``np.cross`` spends most of its time on axis bookkeeping)."""
+    out = np.empty_like(a)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
 def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    norm = np.linalg.norm(v, axis=-1)
+    norm = np.sqrt(np.einsum("...k,...k->...", v, v))
     safe = np.where(norm > 0, norm, 1.0)
     return v / safe[..., None], norm
 
@@ -56,7 +65,7 @@ def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def triangle_normals(x: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Unit normals ``(b − a) × (c − a)`` of the triangles in stored (counter-clockwise) order."""
     a, b, c = (x[triangles[:, k]] for k in range(3))
-    return _unit(np.cross(b - a, c - a))[0]
+    return _unit(_cross(b - a, c - a))[0]
 
 
 def unwrap(theta_raw: np.ndarray, theta_prev: np.ndarray) -> np.ndarray:
@@ -80,11 +89,13 @@ def evaluate(
     *,
     forces: bool = True,
     jacobians: bool = False,
+    damping_velocity: np.ndarray | None = None,
 ) -> Evaluation:
     """Energy (and forces, and optionally the element Jacobians) at positions ``x`` for fold percent ``percent``.
 
     ``theta_prev`` (rad, per hinge) is the previous fold angle used for unwrapping; ``None`` means zeros, as in
-    Origami Simulator's reset state.
+    Origami Simulator's reset state. ``damping_velocity`` (``(n, 3)``) adds the bar damping ``c (v_j − v_i)`` to the
+    returned forces in the same scatter (the faithful integrator's step); it does not change the energy.
     """
     n = model.n_nodes
     if theta_prev is None:
@@ -101,6 +112,8 @@ def evaluate(
     energy = 0.5 * float(np.dot(model.bar_k, stretch * stretch))
     if forces:
         f = (model.bar_k * stretch)[:, None] * dhat  # force on i (towards j when stretched)
+        if damping_velocity is not None:
+            f = f + model.bar_c[:, None] * (damping_velocity[j] - damping_velocity[i])
         idx_parts += [i, j]
         val_parts += [f, -f]
     if jacobians:
@@ -111,6 +124,7 @@ def evaluate(
         out.bar_blocks = model.bar_k[:, None, None] * (outer + geo[:, None, None] * (np.eye(3) - outer))
 
     # --- hinges -----------------------------------------------------------------------------------------------
+    normals = None
     if len(model.hinge_k):
         v1, v2 = model.hinge_edge_nodes[:, 0], model.hinge_edge_nodes[:, 1]
         w1, w2 = model.hinge_wings[:, 0], model.hinge_wings[:, 1]
@@ -118,7 +132,7 @@ def evaluate(
         normals = triangle_normals(x, model.triangles)
         n1, n2 = normals[model.hinge_faces[:, 0]], normals[model.hinge_faces[:, 1]]
         chat, L = _unit(x4 - x3)
-        raw = np.arctan2(_rows_dot(np.cross(n1, chat), n2), np.clip(_rows_dot(n1, n2), -1.0, 1.0))
+        raw = np.arctan2(_rows_dot(_cross(n1, chat), n2), np.clip(_rows_dot(n1, n2), -1.0, 1.0))
         theta = unwrap(raw, theta_prev)
         r1, r2 = x1 - x3, x2 - x3
         p1, p2 = _rows_dot(chat, r1), _rows_dot(chat, r2)
@@ -164,25 +178,34 @@ def evaluate(
         dev = np.where(ok[:, None], alpha - model.face_alpha0, 0.0)
         energy += 0.5 * model.face_k * float(np.sum(dev * dev))
         if forces or jacobians:
-            nrm = _unit(np.cross(b - a, c - a))[0]
-            P_ab = np.cross(nrm, e_ab) / np.where(ok, l_ab, 1.0)[:, None]
-            P_ac = np.cross(nrm, e_ac) / np.where(ok, l_ac, 1.0)[:, None]
-            P_bc = np.cross(nrm, e_bc) / np.where(ok, l_bc, 1.0)[:, None]
-            # grad[t, corner, node] = ∂α_corner / ∂x_node (nodes a, b, c)
-            grad = np.stack(
-                [
-                    np.stack([P_ab - P_ac, -P_ab, P_ac], axis=1),
-                    np.stack([-P_ab, P_ab + P_bc, -P_bc], axis=1),
-                    np.stack([P_ac, -P_bc, P_bc - P_ac], axis=1),
-                ],
-                axis=1,
-            )
-            grad = np.where(ok[:, None, None, None], grad, 0.0)
-            if forces:
-                f = -model.face_k * np.einsum("tc,tcnk->tnk", dev, grad)
+            nrm = normals if normals is not None else triangle_normals(x, tri)
+            P_ab = _cross(nrm, e_ab) / np.where(ok, l_ab, 1.0)[:, None]
+            P_ac = _cross(nrm, e_ac) / np.where(ok, l_ac, 1.0)[:, None]
+            P_bc = _cross(nrm, e_bc) / np.where(ok, l_bc, 1.0)[:, None]
+            if forces and not jacobians:
+                # the same negative gradient, written out per node (reference §3.5) without the 4-D Jacobian
+                ka, kb, kc = (np.where(ok, -model.face_k * dev[:, q], 0.0)[:, None] for q in range(3))
                 idx_parts += [tri[:, 0], tri[:, 1], tri[:, 2]]
-                val_parts += [f[:, 0], f[:, 1], f[:, 2]]
+                val_parts += [
+                    ka * (P_ab - P_ac) - kb * P_ab + kc * P_ac,
+                    -ka * P_ab + kb * (P_ab + P_bc) - kc * P_bc,
+                    ka * P_ac - kb * P_bc + kc * (P_bc - P_ac),
+                ]
             if jacobians:
+                # grad[t, corner, node] = ∂α_corner / ∂x_node (nodes a, b, c)
+                grad = np.stack(
+                    [
+                        np.stack([P_ab - P_ac, -P_ab, P_ac], axis=1),
+                        np.stack([-P_ab, P_ab + P_bc, -P_bc], axis=1),
+                        np.stack([P_ac, -P_bc, P_bc - P_ac], axis=1),
+                    ],
+                    axis=1,
+                )
+                grad = np.where(ok[:, None, None, None], grad, 0.0)
+                if forces:
+                    f = -model.face_k * np.einsum("tc,tcnk->tnk", dev, grad)
+                    idx_parts += [tri[:, 0], tri[:, 1], tri[:, 2]]
+                    val_parts += [f[:, 0], f[:, 1], f[:, 2]]
                 out.face_grad = grad
 
     out.energy = energy
@@ -214,3 +237,33 @@ def characteristic_force(model: BarHingeModel, crease_stiffness: float, panel_st
     """
     scale = max(crease_stiffness, panel_stiffness)
     return float(scale) if scale > 0 else 1.0
+
+
+def hessian_matvec(model: BarHingeModel, ev: Evaluation, v: np.ndarray) -> np.ndarray:
+    """Gauss–Newton Hessian (the PSD blocks of ``ev``, see ``core.solver_newton``) times ``v`` (``(n, 3)``).
+
+    Element by element, without assembling a matrix: bars ``K_b (v_j − v_i)``, hinges ``k ∇θ (∇θ·v)``, faces
+    ``k_f Σ ∇α (∇α·v)``. Used by the power iteration of the time-step bound and by preconditioned CG.
+    """
+    n = model.n_nodes
+    i, j = model.bar_nodes[:, 0], model.bar_nodes[:, 1]
+    fb = np.einsum("bij,bj->bi", ev.bar_blocks, v[j] - v[i])
+    nodes, vals = [i, j], [-fb, fb]
+    if ev.hinge_grad is not None and len(ev.hinge_k):
+        g = ev.hinge_grad
+        hn = np.column_stack([model.hinge_wings, model.hinge_edge_nodes])
+        s = ev.hinge_k * np.einsum("hak,hak->h", g, v[hn])
+        nodes += [hn[:, q] for q in range(4)]
+        vals += [s[:, None] * g[:, q] for q in range(4)]
+    if ev.face_grad is not None:
+        fg = ev.face_grad
+        tri = model.triangles
+        c = model.face_k * np.einsum("tcak,tak->tc", fg, v[tri])
+        nodes += [tri[:, q] for q in range(3)]
+        vals += [np.einsum("tc,tck->tk", c, fg[:, :, q]) for q in range(3)]
+    return scatter(n, nodes, vals)
+
+
+def damping_matvec(model: BarHingeModel, v: np.ndarray) -> np.ndarray:
+    """Damping matrix times ``v``: ``C v = −damping_forces(v)`` (a weighted graph Laplacian, PSD)."""
+    return -damping_forces(model, v)

@@ -22,6 +22,9 @@ from . import _common
 TICK_BUDGET_S = 0.03
 """Computation per modal timer tick (seconds), so the interface stays responsive."""
 
+RUNNING: dict[str, float] = {}
+"""Modal bakes in progress: fold object name → fraction done (the sidebar draws it as a progress bar)."""
+
 
 def percent_schedule(ob: bpy.types.Object, frames: list[int]) -> np.ndarray:
     """Fold percent (fraction) per frame: the keyframed ``curved_fold_mesh.fold_percent`` if animated, else a
@@ -199,8 +202,14 @@ class CURVED_FOLD_OT_bake(bpy.types.Operator):
         if context.area is not None:
             context.area.header_text_set(text)
         context.window_manager.progress_update(len(job.positions))
+        RUNNING[job.ob_name] = job.progress
+        for area in context.screen.areas if context.screen is not None else ():
+            if area.type == "VIEW_3D":
+                area.tag_redraw()
 
     def _finish(self, context) -> None:
+        if self._job is not None:
+            RUNNING.pop(self._job.ob_name, None)
         wm = context.window_manager
         if self._timer is not None:
             wm.event_timer_remove(self._timer)

@@ -128,6 +128,11 @@ class VIEW3D_PT_curved_fold_animation(bpy.types.Panel):
         row.prop(props, "steps_per_frame")
         scene = context.scene
         layout.label(text=f"Frames {scene.frame_start}–{scene.frame_end}; baked: {props.baked_frames}")
+        from ..operators.bake import RUNNING
+
+        running = RUNNING.get(context.active_object.name)
+        if running is not None and hasattr(layout, "progress"):  # UILayout.progress: Blender 4.0+
+            layout.progress(factor=running, type="BAR", text=f"Baking… {100 * running:.0f} % (Esc cancels)")
         row = layout.row(align=True)
         row.operator("curved_fold.bake", icon="RENDER_ANIMATION")
         row.operator("curved_fold.clear_bake", text="", icon="X")

@@ -293,6 +293,20 @@ def test_read_blend_file_leaves_the_open_file_alone(mod, clean_scene, tmp_path):
             np.testing.assert_allclose(sa.points, sb.points, atol=1e-9)
     with pytest.raises(mod.PatternError, match="no such file"):
         mod.read_blend_file(tmp_path / "missing.blend")
+    (tmp_path / "text.blend").write_text("not a blend file")
+    with pytest.raises(mod.PatternError, match="text.blend: cannot read as a .blend file"):
+        mod.read_blend_file(tmp_path / "text.blend")
+    assert len(bpy.data.libraries) == 0
+
+
+def test_objects_from_curves_failure_creates_nothing(mod, clean_scene):
+    good = CreaseCurve([CurveSegment("line", np.array([[0.0, 0.0], [10.0, 0.0]]))], "V", 90.0, source="good")
+    bad = CreaseCurve(
+        [CurveSegment("line", np.array([[0.0, 0.0], [0.0, 10.0]]))], "X", None, source="SVG <path> (line 7)"
+    )
+    with pytest.raises(mod.PatternError, match=r"SVG <path> \(line 7\): unknown assignment 'X'"):
+        mod.objects_from_curves([good, bad], clean_scene.collection)
+    assert len(bpy.data.objects) == 0 and len(bpy.data.curves) == 0
 
 
 def test_set_crease_role_operator_colours_and_selects(extension, clean_scene):

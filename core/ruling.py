@@ -18,6 +18,13 @@ Because every swap strictly lowers the total cost (∞ counted first), the loop 
 queue with lazy re-evaluation: after a swap only the edges of the triangles around its four vertices are
 re-scored (the valence and the quads change only there).
 
+Speed: the swaps are *decided* on a plain half-edge structure (a dict from directed edge to triangle, Python lists),
+with every edge's cost, quad, convexity and valence test evaluated for the whole mesh at once in numpy at the start
+and the heap built with ``heapify``; only the few edges around each accepted swap are re-evaluated one by one. The
+accepted swaps are then *applied* to a ``bmesh`` with ``bmesh.ops.rotate_edges`` (one call per swap, through a
+direct map from vertex pair to BMEdge), and each rotation is checked to connect the expected corners; the final
+triangles are read back from the BMesh and checked against the half-edge structure.
+
 The endpoint angles depend only on which *wedge* between consecutive pattern segments at P the edge lies in, which
 no swap changes (pattern segments are never swapped). So the walk around P inside the face is replaced by a lookup
 among P's pattern segments sorted by angle: the same X1, X2 as the walk, in O(log deg).
@@ -66,6 +73,16 @@ class EndpointScorer:
         self._flags = [flags[start[v] : start[v + 1]].tolist() for v in range(n)]
         self._xy = self.vertices.tolist()
         self._cost: dict[tuple[int, int], float] = {}
+        deg = np.diff(start)
+        width = max(1, int(deg.max()) if n else 1)
+        slot = np.arange(len(ang)) - np.repeat(start[:-1], deg)
+        self._deg = deg
+        self._start = start[:-1]
+        self._ang_sorted = ang
+        self._flag_sorted = flags
+        # per-vertex segment angles padded with +inf: the wedge of a direction is found by counting smaller angles
+        self._ang_table = np.full((n, width), np.inf)
+        self._ang_table[ends[:, 0], slot] = ang
 
     def wedge(self, p: int, q: int) -> tuple[float, float, bool]:
         """``(θ_a, θ_b, scores)`` for edge p→q: angles from the clockwise-previous segment to pq and from pq to the
@@ -83,6 +100,48 @@ class EndpointScorer:
         theta_b = (angs[nxt] - a) % two_pi
         scores = k >= 2 and bool(self._flags[p][nxt]) and bool(self._flags[p][prv])
         return theta_a, theta_b, scores
+
+    def _endpoints(self, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`endpoint` for arrays of edges p→q: ``(score, scores)`` with the same floating-point operations
+        as the scalar path (``math.atan2`` for the edge direction, as :meth:`wedge`), so the values are identical."""
+        xy = self.vertices
+        d = xy[q] - xy[p]
+        a = np.fromiter(map(math.atan2, d[:, 1].tolist(), d[:, 0].tolist()), dtype=float, count=len(p))
+        k = self._deg[p]
+        has = k > 0
+        kk = np.maximum(k, 1)
+        i = np.count_nonzero(self._ang_table[p] < a[:, None], axis=1)  # = bisect_left over the sorted angles
+        nxt, prv = self._start[p] + i % kk, self._start[p] + (i - 1) % kk
+        nxt, prv = np.where(has, nxt, 0), np.where(has, prv, 0)
+        two_pi = 2.0 * math.pi
+        if len(self._ang_sorted):
+            theta_a = np.mod(a - self._ang_sorted[prv], two_pi)
+            theta_b = np.mod(self._ang_sorted[nxt] - a, two_pi)
+            scores = (k >= 2) & self._flag_sorted[nxt] & self._flag_sorted[prv]
+        else:
+            theta_a = theta_b = np.zeros(len(p))
+            scores = np.zeros(len(p), dtype=bool)
+        return (theta_a - theta_b) ** 2, scores
+
+    def costs(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """:meth:`cost` of many edges at once (vectorised; fills the same cache, identical values)."""
+        p = np.asarray(p, dtype=np.int64).reshape(-1)
+        q = np.asarray(q, dtype=np.int64).reshape(-1)
+        if len(p) == 0:
+            return np.zeros(0)
+        sp, okp = self._endpoints(p, q)
+        sq, okq = self._endpoints(q, p)
+        value = np.where(okp & okq, sp + sq, np.where(okp, 2.0 * sp, np.where(okq, 2.0 * sq, _INF)))
+        lo, hi = np.minimum(p, q).tolist(), np.maximum(p, q).tolist()
+        cache = self._cost
+        out = value.tolist()
+        for k, key in enumerate(zip(lo, hi, strict=True)):
+            cached = cache.get(key)
+            if cached is None:
+                cache[key] = out[k]
+            else:
+                out[k] = cached
+        return np.asarray(out, dtype=float)
 
     def endpoint(self, p: int, q: int) -> float | None:
         """(θ_a − θ_b)² at endpoint p of edge pq, or None when p does not score."""
@@ -112,6 +171,200 @@ def _orient(p: list[float], q: list[float], r: list[float]) -> float:
     return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
 
 
+def _orient_v(p: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """:func:`_orient` over rows (the same floating-point operations, so the same values)."""
+    return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
+
+
+def _strictly_crosses(o1, o2, eps):
+    """Segments' end orientations o1, o2 on strictly opposite sides (beyond ``eps``)."""
+    return ((o1 > eps) & (o2 < -eps)) | ((o1 < -eps) & (o2 > eps))
+
+
+def _decide_swaps(
+    vertices: np.ndarray,
+    triangles: np.ndarray,
+    triangle_face: np.ndarray,
+    segments: np.ndarray,
+    scorer: EndpointScorer,
+    max_valence: int,
+    max_swaps: int | None,
+) -> tuple[list[tuple[int, ...]], list[list[int]], dict[str, int]]:
+    """Run the greedy swap loop on a half-edge structure; return the swaps ``(a, c, b, d, t1, t2, f)`` in order (edge
+    ac becomes bd; t1, t2 the two triangle slots of the quad, f its crease-pattern face), the final triangles (CCW,
+    same slots as the input) and loop statistics."""
+    n = len(vertices)
+    xy = vertices.tolist()
+    scale2 = float(np.sum((vertices.max(0) - vertices.min(0)) ** 2)) or 1.0
+    eps = 1e-12 * scale2
+    seg_code = np.unique(np.sort(segments, axis=1) @ np.array([n, 1], dtype=np.int64)) if len(segments) else None
+    constrained = {(int(a), int(b)) for a, b in np.sort(segments, axis=1).tolist()}
+
+    # half-edges h = 3 * triangle + k, from corner k to corner k + 1
+    org = triangles.reshape(-1)
+    dst = np.roll(triangles, -1, axis=1).reshape(-1)
+    opp = np.roll(triangles, -2, axis=1).reshape(-1)  # the triangle's third vertex, opposite the half-edge
+    code = org * n + dst
+    order = np.argsort(code)
+    twin_code = dst * n + org
+    pos = np.clip(np.searchsorted(code[order], twin_code), 0, len(code) - 1)
+    twin = np.where(code[order][pos] == twin_code, order[pos], -1)
+    lo, hi = np.minimum(org, dst), np.maximum(org, dst)
+    is_seg = np.isin(lo * n + hi, seg_code) if seg_code is not None else np.zeros(len(org), dtype=bool)
+
+    # facet valence per (vertex, crease-pattern face): facet edges = interior non-segment edges, counted once
+    face_of_he = np.repeat(triangle_face, 3)
+    facet_once = (twin >= 0) & ~is_seg & (org < dst)
+    valence: dict[tuple[int, int], int] = {}
+    for v, f in zip(
+        np.concatenate([org[facet_once], dst[facet_once]]).tolist(),
+        np.concatenate([face_of_he[facet_once], face_of_he[facet_once]]).tolist(),
+        strict=True,
+    ):
+        valence[(v, f)] = valence.get((v, f), 0) + 1
+
+    # first evaluation of every edge at once (each interior non-segment edge through its half-edge with org < dst)
+    stats = {"convex": 0, "valence": 0}
+    cand = np.flatnonzero(facet_once)
+    a_, c_ = org[cand], dst[cand]
+    b_, d_ = opp[cand], opp[twin[cand]]
+    nlo, nhi = np.minimum(b_, d_), np.maximum(b_, d_)
+    new_cost = scorer.costs(b_, d_)
+    old_cost = scorer.costs(a_, c_)
+    ok = ~np.isin(nlo * n + nhi, seg_code) if seg_code is not None else np.ones(len(cand), dtype=bool)
+    ok &= new_cost < old_cost
+    stats["convex"] += int(np.count_nonzero(ok))
+    pa, pb, pc, pd = vertices[a_], vertices[b_], vertices[c_], vertices[d_]
+    ok &= _strictly_crosses(_orient_v(pb, pd, pa), _orient_v(pb, pd, pc), eps)
+    ok &= _strictly_crosses(_orient_v(pa, pc, pb), _orient_v(pa, pc, pd), eps)
+    f_ = face_of_he[cand]
+    vb = np.array([valence.get((b, f), 0) for b, f in zip(b_.tolist(), f_.tolist(), strict=True)], dtype=np.int64)
+    vd = np.array([valence.get((d, f), 0) for d, f in zip(d_.tolist(), f_.tolist(), strict=True)], dtype=np.int64)
+    too_many = ok & ((vb > max_valence) | (vd > max_valence))
+    stats["valence"] += int(np.count_nonzero(too_many))
+    ok &= ~too_many
+    ok &= ~np.isin(b_ * n + d_, code) & ~np.isin(d_ * n + b_, code)
+
+    # the mutable half-edge structure: directed edge -> triangle; an id per edge instance (a flipped edge dies)
+    tris = triangles.tolist()
+    tface = triangle_face.tolist()
+    owner: dict[tuple[int, int], int] = {}
+    for ti, (x, y, z) in enumerate(tris):
+        owner[(x, y)] = ti
+        owner[(y, z)] = ti
+        owner[(z, x)] = ti
+    vert_tris: list[set[int]] = [set() for _ in range(n)]
+    for ti, tri in enumerate(tris):
+        for v in tri:
+            vert_tris[v].add(ti)
+    edge_id: dict[tuple[int, int], int] = {}
+    next_id = [0]
+
+    def instance(key: tuple[int, int]) -> int:
+        eid = edge_id.get(key)
+        if eid is None:
+            eid = edge_id[key] = next_id[0]
+            next_id[0] += 1
+        return eid
+
+    def evaluate(a: int, c: int) -> tuple[float, tuple[int, int]] | None:
+        """The new cost if edge ac is a swap candidate, with the new edge's key; None otherwise."""
+        if (a, c) in constrained:
+            return None
+        t1, t2 = owner.get((a, c)), owner.get((c, a))
+        if t1 is None or t2 is None:
+            return None
+        tr1, tr2 = tris[t1], tris[t2]
+        b = tr1[0] + tr1[1] + tr1[2] - a - c
+        d = tr2[0] + tr2[1] + tr2[2] - a - c
+        key = (b, d) if b < d else (d, b)
+        if key in constrained:
+            return None
+        new = scorer.cost(b, d)
+        if not new < scorer.cost(a, c):
+            return None
+        stats["convex"] += 1
+        pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
+        o1, o2 = _orient(pb, pd, pa), _orient(pb, pd, pc)
+        o3, o4 = _orient(pa, pc, pb), _orient(pa, pc, pd)
+        if not ((o1 > eps and o2 < -eps) or (o1 < -eps and o2 > eps)):
+            return None
+        if not ((o3 > eps and o4 < -eps) or (o3 < -eps and o4 > eps)):
+            return None
+        f = tface[t1]
+        if valence.get((b, f), 0) > max_valence or valence.get((d, f), 0) > max_valence:
+            stats["valence"] += 1
+            return None
+        if (b, d) in owner or (d, b) in owner:
+            return None
+        return new, key
+
+    heap: list[tuple[float, tuple[int, int], tuple[int, int], int, int]] = []
+    counter = 0
+    for k in np.flatnonzero(ok).tolist():
+        key = (int(a_[k]), int(c_[k]))
+        counter += 1
+        heap.append((float(new_cost[k]), (int(nlo[k]), int(nhi[k])), key, counter, instance(key)))
+    heapq.heapify(heap)
+
+    def push(key: tuple[int, int]) -> None:
+        nonlocal counter
+        r = evaluate(*key)
+        if r is not None:
+            counter += 1
+            heapq.heappush(heap, (r[0], r[1], key, counter, instance(key)))
+
+    swaps: list[tuple[int, ...]] = []
+    n_edges = int(np.count_nonzero(twin < 0)) + int(np.count_nonzero(twin >= 0)) // 2
+    cap = max_swaps if max_swaps is not None else 100 * max(1, n_edges)
+    while heap and len(swaps) < cap:
+        cost, key, old, _n, eid = heapq.heappop(heap)
+        if edge_id.get(old) != eid:  # the edge this entry was queued for has been flipped away
+            continue
+        r = evaluate(*old)
+        if r is None:
+            continue
+        if r[0] != cost:  # stale entry: its value changed since it was queued
+            push(old)
+            continue
+        a, c = old
+        t1, t2 = owner[(a, c)], owner[(c, a)]
+        tr1, tr2 = tris[t1], tris[t2]
+        b = tr1[0] + tr1[1] + tr1[2] - a - c
+        d = tr2[0] + tr2[1] + tr2[2] - a - c
+        f = tface[t1]
+        # t1 = (a, c, b) and t2 = (c, a, d), CCW; the quad is a, d, c, b; the new triangles (a, d, b), (d, c, b)
+        for x, y, z in (tr1, tr2):
+            del owner[(x, y)], owner[(y, z)], owner[(z, x)]
+        tris[t1], tris[t2] = [a, d, b], [d, c, b]
+        for ti in (t1, t2):
+            x, y, z = tris[ti]
+            owner[(x, y)] = ti
+            owner[(y, z)] = ti
+            owner[(z, x)] = ti
+        vert_tris[a].discard(t2)
+        vert_tris[c].discard(t1)
+        vert_tris[b].add(t2)
+        vert_tris[d].add(t1)
+        del edge_id[old]
+        instance(key)
+        swaps.append((a, c, b, d, t1, t2, f))
+        valence[(a, f)] -= 1
+        valence[(c, f)] -= 1
+        valence[(b, f)] = valence.get((b, f), 0) + 1
+        valence[(d, f)] = valence.get((d, f), 0) + 1
+        seen: set[tuple[int, int]] = set()
+        for vi in (a, c, b, d):
+            for ti in vert_tris[vi]:
+                x, y, z = tris[ti]
+                for p, q in ((x, y), (y, z), (z, x)):
+                    e = (p, q) if p < q else (q, p)
+                    if e not in seen:
+                        seen.add(e)
+                        push(e)
+    return swaps, tris, stats
+
+
 def ruling_swaps(
     vertices: np.ndarray,
     triangles: np.ndarray,
@@ -126,6 +379,7 @@ def ruling_swaps(
 
     ``max_valence``: a new endpoint may have at most this many facet edges in the face before the swap (paper: 3).
     ``max_swaps`` caps the loop (default: no practical cap; the loop terminates on its own).
+    The swaps are decided on arrays (see the module docstring) and applied with ``bmesh.ops.rotate_edges``.
     """
     # isort: off
     import bpy  # noqa: F401  (bmesh needs bpy imported first in the bpy module)
@@ -134,117 +388,68 @@ def ruling_swaps(
     # isort: on
 
     vertices = np.asarray(vertices, dtype=float)
-    triangles = np.asarray(triangles, dtype=np.int64)
+    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     triangle_face = np.asarray(triangle_face, dtype=np.int64)
     segments = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
     scorer = EndpointScorer(vertices, segments, np.asarray(segment_is_curve, dtype=bool))
-    constrained = {(int(min(a, b)), int(max(a, b))) for a, b in segments.tolist()}
-    scale2 = float(np.sum((vertices.max(0) - vertices.min(0)) ** 2)) or 1.0
-    eps = 1e-12 * scale2
-    xy = vertices.tolist()
+    swaps, decided, stats = _decide_swaps(vertices, triangles, triangle_face, segments, scorer, max_valence, max_swaps)
+    if not swaps:
+        return SwapResult(triangles.copy(), triangle_face.copy(), 0, stats["convex"], stats["valence"])
 
     bm = bmesh.new()
     try:
-        face_layer = bm.faces.layers.int.new("cp_face")
         verts = [bm.verts.new((float(x), float(y), 0.0)) for x, y in vertices.tolist()]
         bm.verts.index_update()
-        for tri, f in zip(triangles.tolist(), triangle_face.tolist(), strict=True):
-            face = bm.faces.new([verts[i] for i in tri])
-            face[face_layer] = f
-        bm.edges.ensure_lookup_table()
-
-        # facet valence per (vertex, crease-pattern face)
-        valence: dict[tuple[int, int], int] = {}
-        for e in bm.edges:
-            a, b = e.verts[0].index, e.verts[1].index
-            if (min(a, b), max(a, b)) in constrained or len(e.link_faces) != 2:
-                continue
-            f = e.link_faces[0][face_layer]
-            valence[(a, f)] = valence.get((a, f), 0) + 1
-            valence[(b, f)] = valence.get((b, f), 0) + 1
-
-        stats = {"convex": 0, "valence": 0}
-
-        def evaluate(e) -> tuple[float, tuple[int, int]] | None:
-            """The new cost if e is a swap candidate, with the new edge's key; None otherwise."""
-            if not e.is_valid or len(e.link_faces) != 2:
-                return None
-            a, c = e.verts[0].index, e.verts[1].index
-            if (min(a, c), max(a, c)) in constrained:
-                return None
-            f1, f2 = e.link_faces
-            b = next(v.index for v in f1.verts if v.index != a and v.index != c)
-            d = next(v.index for v in f2.verts if v.index != a and v.index != c)
-            key = (min(b, d), max(b, d))
-            if key in constrained:
-                return None
-            new = scorer.cost(b, d)
-            if not new < scorer.cost(a, c):
-                return None
-            stats["convex"] += 1
-            pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
-            o1, o2 = _orient(pb, pd, pa), _orient(pb, pd, pc)
-            o3, o4 = _orient(pa, pc, pb), _orient(pa, pc, pd)
-            if not ((o1 > eps and o2 < -eps) or (o1 < -eps and o2 > eps)):
-                return None
-            if not ((o3 > eps and o4 < -eps) or (o3 < -eps and o4 > eps)):
-                return None
-            f = f1[face_layer]
-            if valence.get((b, f), 0) > max_valence or valence.get((d, f), 0) > max_valence:
-                stats["valence"] += 1
-                return None
-            if bm.edges.get((verts[b], verts[d])) is not None:
-                return None
-            return new, key
-
-        heap: list[tuple[float, tuple[int, int], tuple[int, int], int, object]] = []
-        counter = [0]
-
-        def push(e) -> None:
-            r = evaluate(e)
-            if r is not None:
-                a, c = e.verts[0].index, e.verts[1].index
-                counter[0] += 1
-                heapq.heappush(heap, (r[0], r[1], (min(a, c), max(a, c)), counter[0], e))
-
-        for e in bm.edges:
-            push(e)
-        swaps = 0
-        cap = max_swaps if max_swaps is not None else 100 * max(1, len(bm.edges))
-        while heap and swaps < cap:
-            cost, key, _old, _n, e = heapq.heappop(heap)
-            r = evaluate(e)
-            if r is None:
-                continue
-            if r[0] != cost:  # stale entry: its value changed since it was queued
-                push(e)
-                continue
-            a, c = e.verts[0].index, e.verts[1].index
-            f = e.link_faces[0][face_layer]
-            out = bmesh.ops.rotate_edges(bm, edges=[e], use_ccw=False)["edges"]
-            if not out:  # pragma: no cover - evaluate() already excludes what rotate_edges refuses
-                continue
-            ne = out[0]
-            nb, nd = ne.verts[0].index, ne.verts[1].index
-            if (min(nb, nd), max(nb, nd)) != key:  # pragma: no cover - rotation must connect the opposite corners
-                raise RuntimeError(f"edge rotation produced ({nb}, {nd}) instead of {key}")
-            for face in ne.link_faces:  # bmesh does not carry face layers through rotation
-                face[face_layer] = f
-            swaps += 1
-            valence[(a, f)] -= 1
-            valence[(c, f)] -= 1
-            valence[(nb, f)] = valence.get((nb, f), 0) + 1
-            valence[(nd, f)] = valence.get((nd, f), 0) + 1
-            seen = set()
-            for vi in (a, c, nb, nd):
-                for face in verts[vi].link_faces:
-                    for edge in face.edges:
-                        if edge not in seen:
-                            seen.add(edge)
-                            push(edge)
-
-        tris = np.array([[v.index for v in face.verts] for face in bm.faces], dtype=np.int64).reshape(-1, 3)
-        tface = np.array([face[face_layer] for face in bm.faces], dtype=np.int64)
+        for tri in triangles.tolist():
+            bm.faces.new([verts[i] for i in tri])
+        for batch in _independent_runs(swaps):
+            edges = []
+            for a, c, *_ in batch:
+                e = bm.edges.get((verts[a], verts[c]))
+                if e is None:  # pragma: no cover - the half-edge structure and the BMesh went apart
+                    raise RuntimeError(f"ruling swaps: edge ({a}, {c}) is missing from the BMesh")
+                edges.append(e)
+            out = bmesh.ops.rotate_edges(bm, edges=edges, use_ccw=False)["edges"]
+            if len(out) < len(batch):
+                # with several edges rotate_edges also refuses rotations it deems degenerate (in float32); a
+                # single-edge call does not. The quads are disjoint, so the refused ones can follow one by one.
+                done = {frozenset((ne.verts[0].index, ne.verts[1].index)) for ne in out}
+                for (_a, _c, b, d, *_), e in zip(batch, edges, strict=True):
+                    if frozenset((b, d)) not in done:
+                        out += bmesh.ops.rotate_edges(bm, edges=[e], use_ccw=False)["edges"]
+            if len(out) != len(batch):  # pragma: no cover - every decided swap is a valid rotation
+                raise RuntimeError(f"ruling swaps: bmesh rotated {len(out)} of {len(batch)} edges")
+        bm_tris = np.array([[v.index for v in face.verts] for face in bm.faces], dtype=np.int64).reshape(-1, 3)
     finally:
         bm.free()
-    return SwapResult(tris, tface, swaps, stats["convex"], stats["valence"])
+    tris = np.asarray(decided, dtype=np.int64).reshape(-1, 3)
+    if not np.array_equal(_canonical(bm_tris), _canonical(tris)):  # pragma: no cover
+        raise RuntimeError("ruling swaps: the BMesh after rotation differs from the decided triangulation")
+    return SwapResult(tris, triangle_face.copy(), len(swaps), stats["convex"], stats["valence"])
+
+
+def _independent_runs(swaps: list[tuple[int, ...]]) -> list[list[tuple[int, ...]]]:
+    """Split the swap sequence into consecutive runs whose quads share no triangle.
+
+    The swaps of one run commute (disjoint quads), so one ``rotate_edges`` call per run gives the same BMesh as one
+    call per swap (``rotate_edges`` handles edges with disjoint face pairs one after another in the given order),
+    while paying the operator's per-call set-up (tool-flag layers over the whole mesh) once per run.
+    """
+    runs: list[list[tuple[int, ...]]] = []
+    used: set[int] = set()
+    for sw in swaps:
+        t1, t2 = sw[4], sw[5]
+        if not runs or t1 in used or t2 in used:
+            runs.append([])
+            used = set()
+        runs[-1].append(sw)
+        used.add(t1)
+        used.add(t2)
+    return runs
+
+
+def _canonical(tris: np.ndarray) -> np.ndarray:
+    """Triangles rotated to start at their smallest index, rows sorted (winding kept): for set comparison."""
+    k = np.argmin(tris, axis=1)
+    rot = np.take_along_axis(tris, (k[:, None] + np.arange(3)[None, :]) % 3, axis=1)
+    return rot[np.lexsort((rot[:, 2], rot[:, 1], rot[:, 0]))]

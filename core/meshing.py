@@ -19,7 +19,7 @@ from .earcut import ear_clip
 from .mesh import FoldMesh
 from .pattern import CreasePattern
 from .ruling import ruling_swaps
-from .triangulate import _boundary_loops, _loop_area, constrained_triangulation, orient, split_cuts
+from .triangulate import _outer_first, constrained_triangulation, face_loops, orient, split_cuts
 
 MESH_TYPES = ("ruling", "cdt", "earcut")
 
@@ -101,18 +101,13 @@ def build_mesh(pattern: CreasePattern, mesh_type: str = "ruling", backend: str =
     edge_polyline = np.full(len(edges), -1, dtype=np.int64)
     edge_polyline[is_seg] = pattern.edge_polyline[src[is_seg]]
 
-    # crease-pattern face loops in the final (cut-split) numbering
-    seg_keys = set(map(tuple, edges[is_seg].tolist()))
-    faces = []
-    for f in range(len(pt.faces)):
-        members = np.flatnonzero(tface == f)
-
-        def is_boundary(h, own, _seg=seg_keys):
-            return (h[1], h[0]) not in own or (min(h), max(h)) in _seg
-
-        loops = _boundary_loops(tris, members, is_boundary)
-        areas = [_loop_area(verts, lp) for lp in loops]
-        faces.append(np.asarray(loops[int(np.argmax(areas))], dtype=np.int64))
+    # crease-pattern face loops in the final (cut-split) numbering: the outer (largest) loop of each face
+    n_v = np.int64(len(verts))
+    seg_code = np.unique(edges[is_seg, 0] * n_v + edges[is_seg, 1])
+    faces = [
+        np.asarray(_outer_first(verts, loops)[0], dtype=np.int64)
+        for loops in face_loops(verts, tris, tface, len(pt.faces), seg_code)
+    ]
 
     mesh = FoldMesh(
         vertices=verts,

@@ -298,6 +298,92 @@ def _loop_area(points: np.ndarray, loop: list[int]) -> float:
     return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
 
 
+def half_edges(tris: np.ndarray, n_vertices: int, seg_code: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Half-edge arrays of a triangulation: h = 3·triangle + k runs from corner k to corner k + 1.
+
+    Returns ``(org, dst, twin, is_seg)``: origin and destination vertex, the opposite half-edge (−1 on the hull)
+    and whether the half-edge lies on a pattern segment (``seg_code`` = sorted ``i·n + j`` codes with i < j).
+    """
+    n = np.int64(n_vertices)
+    org = tris.reshape(-1)
+    dst = np.roll(tris, -1, axis=1).reshape(-1)
+    code = org * n + dst
+    order = np.argsort(code, kind="stable")
+    sorted_code = code[order]
+    twin_code = dst * n + org
+    pos = np.clip(np.searchsorted(sorted_code, twin_code), 0, max(len(code) - 1, 0))
+    twin = np.where(sorted_code[pos] == twin_code, order[pos], -1) if len(code) else np.zeros(0, dtype=np.int64)
+    is_seg = np.isin(np.minimum(org, dst) * n + np.maximum(org, dst), seg_code)
+    return org, dst, twin, is_seg
+
+
+def face_loops(
+    points: np.ndarray, tris: np.ndarray, tri_face: np.ndarray, n_faces: int, seg_code: np.ndarray
+) -> list[list[list[int]]]:
+    """Boundary loops of every crease-pattern face (the triangles of each face bounded by segments or the hull).
+
+    The loops of a face are listed in the order of their first half-edge (triangle order, then corner order), each
+    starting there: the order the per-face walk :func:`_boundary_loops` gives. The "next boundary half-edge" is found
+    for all half-edges at once by turning around each vertex's fan (vectorised); only the final chaining into loops
+    is a Python pass over the boundary half-edges.
+    """
+    org, _dst, twin, is_seg = half_edges(tris, len(points), seg_code)
+    boundary = (twin < 0) | is_seg
+    h_all = np.arange(len(org))
+    nxt_in_tri = h_all - h_all % 3 + (h_all % 3 + 1) % 3
+    bh = np.flatnonzero(boundary)
+    cur = nxt_in_tri[bh]
+    inner = ~boundary[cur]
+    while inner.any():  # cross to the neighbour triangle, take its half-edge leaving the same vertex
+        cur[inner] = nxt_in_tri[twin[cur[inner]]]
+        inner[inner] = ~boundary[cur[inner]]
+    nxt = np.full(len(org), -1, dtype=np.int64)
+    nxt[bh] = cur
+    nxt_l, org_l = nxt.tolist(), org.tolist()
+    face_of = np.repeat(tri_face, 3).tolist()
+    loops: list[list[list[int]]] = [[] for _ in range(n_faces)]
+    seen = bytearray(len(org))
+    for h in bh.tolist():
+        if seen[h]:
+            continue
+        loop, g = [], h
+        while not seen[g]:
+            seen[g] = 1
+            loop.append(org_l[g])
+            g = nxt_l[g]
+        loops[face_of[h]].append(loop)
+    return loops
+
+
+def _outer_first(points: np.ndarray, loops: list[list[int]]) -> list[list[int]]:
+    """The loop with the largest signed area (the CCW outer boundary) first, the others after it in order."""
+    if len(loops) == 1:
+        return loops
+    areas = [_loop_area(points, lp) for lp in loops]
+    outer = int(np.argmax(areas))
+    return [loops[outer]] + [lp for k, lp in enumerate(loops) if k != outer]
+
+
+def _components(n: int, t1: np.ndarray, t2: np.ndarray) -> np.ndarray:
+    """Connected components of n nodes joined by the pairs (t1, t2): each node's label is the smallest node index of
+    its component (vectorised hooking of roots onto smaller labels with pointer jumping)."""
+    lab = np.arange(n)
+    while True:
+        l1, l2 = lab[t1], lab[t2]
+        m = np.minimum(l1, l2)
+        new = lab.copy()
+        np.minimum.at(new, l1, m)
+        np.minimum.at(new, l2, m)
+        while True:
+            jumped = new[new]
+            if np.array_equal(jumped, new):
+                break
+            new = jumped
+        if np.array_equal(new, lab):
+            return lab
+        lab = new
+
+
 def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> PlanarTriangulation:
     """CDT of the sheet with every pattern segment as an edge, no Steiner points, outside and holes removed."""
     pattern.validate()
@@ -340,46 +426,38 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
         )
     tris, _ = legalise(pts, tris, set(segment_of))
     tris = _canonical_triangles(tris)
+    n_pts = np.int64(len(pts))
+    seg_code = np.unique(key[:, 0] * n_pts + key[:, 1])
+    org, dst, twin, is_seg = half_edges(tris, len(pts), seg_code)
     # every constraint must be present
-    sides = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
-    present = set(map(tuple, sides.tolist()))
-    for (i, j), k in segment_of.items():
-        if (i, j) not in present:
-            where = pattern.sources[pattern.edge_polyline[k]] if pattern.sources else "no source"
-            raise PatternError(
-                f"triangulation: pattern edge {k} ({where})"
-                " is not an edge of the triangulation: it overlaps another segment or passes through a vertex"
-            )
+    present = np.isin(seg_code, np.minimum(org, dst) * n_pts + np.maximum(org, dst))
+    if not present.all():
+        i, j = divmod(int(seg_code[np.flatnonzero(~present)[0]]), int(n_pts))
+        k = segment_of[(i, j)]
+        where = pattern.sources[pattern.edge_polyline[k]] if pattern.sources else "no source"
+        raise PatternError(
+            f"triangulation: pattern edge {k} ({where})"
+            " is not an edge of the triangulation: it overlaps another segment or passes through a vertex"
+        )
 
-    # regions: union triangles across non-constraint edges
+    # regions: triangles connected across non-constraint edges (labelled by their smallest triangle)
     t = len(tris)
-    owner = {}
-    for ti, (a, b, c) in enumerate(tris.tolist()):
-        owner[(a, b)] = ti
-        owner[(b, c)] = ti
-        owner[(c, a)] = ti
-    parent = list(range(t))
-    for (a, b), ti in owner.items():
-        if a < b and (b, a) in owner and (a, b) not in segment_of:
-            ra, rb = _find(parent, ti), _find(parent, owner[(b, a)])
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
-    roots = np.array([_find(parent, i) for i in range(t)])
+    tri_of = np.arange(3 * t) // 3
+    inner = (twin >= 0) & ~is_seg & (org < dst)
+    roots = _components(t, tri_of[inner], tri_of[twin[inner]])
     region_ids, region = np.unique(roots, return_inverse=True)
     n_regions = len(region_ids)
-    outside_seed = set()
+    hull = twin < 0
+    outside_seed = set(region[tri_of[hull & ~is_seg]].tolist())
     adjacency: dict[int, list[tuple[int, bool]]] = {r: [] for r in range(n_regions)}
-    for (a, b), ti in owner.items():
-        if (b, a) not in owner:
-            if (min(a, b), max(a, b)) not in segment_of:
-                outside_seed.add(int(region[ti]))
-            continue
-        if a < b and (a, b) in segment_of:
-            r1, r2 = int(region[ti]), int(region[owner[(b, a)]])
-            if r1 != r2:
-                toggles = pattern.assignments[segment_of[(a, b)]] == "B"
-                adjacency[r1].append((r2, toggles))
-                adjacency[r2].append((r1, toggles))
+    cross = np.flatnonzero((twin >= 0) & is_seg & (org < dst))
+    r1s, r2s = region[tri_of[cross]].tolist(), region[tri_of[twin[cross]]].tolist()
+    seg_codes_cross = (org[cross] * n_pts + dst[cross]).tolist()
+    for r1, r2, c in zip(r1s, r2s, seg_codes_cross, strict=True):
+        if r1 != r2:
+            toggles = pattern.assignments[segment_of[divmod(c, int(n_pts))]] == "B"
+            adjacency[r1].append((r2, toggles))
+            adjacency[r2].append((r1, toggles))
     inside = np.full(n_regions, -1, dtype=np.int64)
     queue = []
     for r in sorted(outside_seed):
@@ -387,12 +465,12 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
         queue.append(r)
     # regions that meet the hull only through constraint edges: the hull edge itself is a border (paper side) or a
     # crease; treat the unbounded side as outside, so a region whose hull edge is a B segment is inside.
-    for (a, b), ti in owner.items():
-        if (b, a) not in owner and (min(a, b), max(a, b)) in segment_of:
-            r = int(region[ti])
-            if inside[r] < 0:
-                inside[r] = 1 if pattern.assignments[segment_of[(min(a, b), max(a, b))]] == "B" else 0
-                queue.append(r)
+    hull_seg = np.flatnonzero(hull & is_seg)
+    lo_h, hi_h = np.minimum(org, dst)[hull_seg].tolist(), np.maximum(org, dst)[hull_seg].tolist()
+    for r, i, j in zip(region[tri_of[hull_seg]].tolist(), lo_h, hi_h, strict=True):
+        if inside[r] < 0:
+            inside[r] = 1 if pattern.assignments[segment_of[(i, j)]] == "B" else 0
+            queue.append(r)
     conflict = False
     while queue:
         r = queue.pop()
@@ -433,19 +511,12 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
         if a >= 0 and b >= 0:
             seg2[(int(min(a, b)), int(max(a, b)))] = k
 
-    faces, face_loops, simple = [], [], []
-    for f in range(len(order)):
-        members = np.flatnonzero(tri_region == f)
-
-        def is_boundary(h, own, _seg=seg2):
-            return (h[1], h[0]) not in own or (min(h), max(h)) in _seg
-
-        loops = _boundary_loops(tris, members, is_boundary)
-        areas = [_loop_area(pts2, lp) for lp in loops]
-        outer = int(np.argmax(areas))
-        loops = [loops[outer]] + [lp for k, lp in enumerate(loops) if k != outer]
+    seg2_code = np.array(sorted(i * len(pts2) + j for i, j in seg2), dtype=np.int64)
+    faces, face_loops_, simple = [], [], []
+    for loops in face_loops(pts2, tris, tri_region, len(order), seg2_code):
+        loops = _outer_first(pts2, loops)
         faces.append(np.asarray(loops[0], dtype=np.int64))
-        face_loops.append([np.asarray(lp, dtype=np.int64) for lp in loops])
+        face_loops_.append([np.asarray(lp, dtype=np.int64) for lp in loops])
         simple.append(len(loops) == 1 and len(set(loops[0])) == len(loops[0]))
     return PlanarTriangulation(
         vertices=pts2,
@@ -453,7 +524,7 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
         triangles=tris,
         triangle_region=tri_region,
         faces=faces,
-        face_loops=face_loops,
+        face_loops=face_loops_,
         face_simple=np.asarray(simple, dtype=bool),
         segment_of=seg2,
         backend=backend,

@@ -1,130 +1,203 @@
-"""``make demo``: run the command line on every example pattern in ``examples/`` and write the results to ``out/``.
+"""``make demo``: fold every example pattern, write the folded meshes to ``out/``, render pictures into ``docs/img/``.
 
-For each ``examples/*.svg``:
+For each ``examples/*.svg`` (the project's own crease patterns, see ``examples/make_examples.py``):
 
-* if the ``fold`` subcommand exists, ``python -m curved_fold fold <svg> --out out/<name>.fold`` and ``--out
-  out/<name>.glb``, then a Workbench picture ``out/<name>.png`` of the folded ``.glb`` (headless Blender);
-* otherwise ``python -m curved_fold discretize <svg> --out out/<name>.fold`` and a clear message that the demo
-  stopped after discretising (the solver is not there yet): nothing is ever presented as folded that was not.
+1. ``python -m curved_fold fold <svg> --out out/<name>.fold --report out/<name>.json`` (folded FOLD file + figures);
+2. ``python -m curved_fold fold <svg> --out out/<name>.glb`` (glTF for any renderer);
+3. a picture ``docs/img/example_<name>.png``, made headless in a separate bpy process *through the add-on's own
+   operators* (Import Crease Pattern, Fold Crease Pattern), rendered with Workbench: on the left the flat crease
+   pattern as drawn (border black, mountain red, valley blue), on the right the folded mesh with its creases, and
+   the run's figures (faces, solver time, strain, warp, fold-angle error) in the title.
 
-Exit code: 0 when every example went through every step available, 1 otherwise.
+Then ``docs/img/make_pictures.py`` (the operators' fold-percent / strain / warp pictures) is run on Origami
+Simulator's ``wavy_pleats.svg`` from the shared fixtures, or on ``examples/curved_pleats.svg`` when the shared
+fixtures are not beside the repository.
+
+Every step echoes its command and output. Exit code 0 when every step succeeded, 1 otherwise (the failures are
+listed at the end). ``cannot_fold.svg`` is meant not to fold as assigned: the demo shows the warning the
+command line prints for it (paper Fig. 7) and counts that run as a success.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import subprocess
 import sys
+import tempfile
+import textwrap
 import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
+IMG = REPO / "docs" / "img"
+FIXTURE = REPO.parent / "shared" / "fixtures" / "origami-simulator" / "wavy_pleats.svg"
+
+COLOURS = {"B": "#000000", "M": "#e00000", "V": "#0030ff", "F": "#d8c000", "U": "#c000c0", "C": "#00a000"}
+"""Crease-pattern drawing colours per FOLD assignment (Origami Simulator's SVG convention)."""
 
 
-def available_subcommands() -> set[str]:
-    """Names of the subcommands the package's command line offers (read from its argparse parser)."""
-    sys.path.insert(0, str(REPO / ".venv" / "links"))  # harmless if curved_fold is already importable
-    from curved_fold.cli import build_parser
-
-    parser = build_parser()
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            return set(action.choices)
-    return set()
+def _show(path: Path) -> str:
+    """``path`` relative to the repository when it is inside it (shorter log lines)."""
+    return str(path.relative_to(REPO)) if path.is_relative_to(REPO) else str(path)
 
 
-def run_cli(args: list[str]) -> bool:
-    """Run ``python -m curved_fold <args>``, echoing the command and its output; True on exit code 0."""
-    print("$ python -m curved_fold " + " ".join(args), flush=True)
+def run_step(label: str, argv: list[str]) -> bool:
+    """Run ``argv`` in the repository, echoing ``label`` as the command and indenting its output; True on exit 0."""
+    print(f"$ {label}", flush=True)
     start = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "curved_fold", *args], cwd=REPO, capture_output=True, text=True)
+    proc = subprocess.run(argv, cwd=REPO, capture_output=True, text=True)
     for line in (proc.stdout + proc.stderr).strip().splitlines():
+        if not line.strip() or "EGL Error" in line or "| INFO:" in line or line.startswith("INFO Draco"):
+            continue  # Mesa's harmless EGL_BAD_MATCH lines (blender-notes §4), the glTF exporter's progress lines
         print("    " + line)
     print(f"    -> exit {proc.returncode} in {time.perf_counter() - start:.1f} s", flush=True)
     return proc.returncode == 0
 
 
-RENDER_SCRIPT = r"""
-import math, sys
-import bpy
-from mathutils import Vector
-
-glb, png = sys.argv[1], sys.argv[2]
-bpy.ops.wm.read_factory_settings(use_empty=True)
-bpy.ops.import_scene.gltf(filepath=glb)
-meshes = [ob for ob in bpy.context.scene.objects if ob.type == "MESH"]
-if not meshes:
-    raise SystemExit(f"{glb}: no mesh to render")
-scene = bpy.context.scene
-scene.frame_set(scene.frame_end)
-points = [ob.matrix_world @ Vector(c) for ob in meshes for c in ob.bound_box]
-lo = Vector([min(p[i] for p in points) for i in range(3)])
-hi = Vector([max(p[i] for p in points) for i in range(3)])
-centre, size = (lo + hi) / 2, max((hi - lo).length, 1e-6)
-cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-scene.collection.objects.link(cam)
-direction = Vector((1.0, -1.0, 0.8)).normalized()
-cam.location = centre + direction * size * 1.6
-cam.rotation_euler = (-direction).to_track_quat("-Z", "Y").to_euler()
-scene.camera = cam
-scene.render.engine = "BLENDER_WORKBENCH"
-scene.display.shading.light = "STUDIO"
-scene.display.shading.color_type = "SINGLE"
-scene.display.shading.show_cavity = True
-scene.render.film_transparent = True
-scene.render.resolution_x, scene.render.resolution_y = 640, 480
-scene.render.image_settings.file_format = "PNG"
-scene.render.filepath = png
-bpy.ops.render.render(write_still=True)
-"""
-
-
-def render(glb: Path, png: Path) -> bool:
-    """Render the last frame of a folded ``.glb`` to ``png`` with Workbench in a separate headless process."""
-    print(f"$ render {glb.relative_to(REPO)} -> {png.relative_to(REPO)}", flush=True)
-    proc = subprocess.run(
-        [sys.executable, "-c", RENDER_SCRIPT, str(glb), str(png)], capture_output=True, text=True, cwd=REPO
-    )
-    ok = proc.returncode == 0 and png.is_file()
-    if not ok:
-        print("    " + (proc.stdout + proc.stderr).strip().replace("\n", "\n    "))
-    print(f"    -> {'ok' if ok else 'FAILED'}", flush=True)
+def fold_example(svg: Path, out: Path) -> bool:
+    """Fold ``svg`` with the command line into ``out/<name>.fold`` (+ JSON report) and ``out/<name>.glb``."""
+    name = svg.stem
+    ok = True
+    for args in (
+        ["fold", _show(svg), "--out", _show(out / f"{name}.fold"), "--report", _show(out / f"{name}.json")],
+        ["fold", _show(svg), "--out", _show(out / f"{name}.glb")],
+    ):
+        ok = run_step("python -m curved_fold " + " ".join(args), [sys.executable, "-m", "curved_fold", *args]) and ok
     return ok
+
+
+# --------------------------------------------------------------------------------------------------------------
+# The picture of one example (runs in its own bpy process: ``python tools/demo.py --picture SVG PNG``).
+
+
+def _draw_pattern(ax, svg: Path) -> None:
+    """Draw the flat crease pattern of ``svg`` (as discretised by the engine) on a matplotlib axis, SVG y-down."""
+    from curved_fold.core.reader import read_pattern
+
+    pattern = read_pattern(svg)
+    v = pattern.vertices
+    for a, colour in COLOURS.items():
+        idx = [k for k, x in enumerate(pattern.assignments) if x == a]
+        if not idx:
+            continue
+        seg = v[pattern.edges[idx]]
+        from matplotlib.collections import LineCollection
+
+        ax.add_collection(LineCollection(seg, colors=colour, linewidths=1.6 if a == "B" else 1.3))
+    ax.set_xlim(v[:, 0].min() - 4, v[:, 0].max() + 4)
+    ax.set_ylim(v[:, 1].min() - 4, v[:, 1].max() + 4)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    ax.set_title("crease pattern", fontsize=11)
+
+
+def make_picture(svg: Path, png: Path) -> None:
+    """Import ``svg`` through the add-on's operators, fold it, render it with Workbench and write the picture."""
+    import bpy
+
+    sys.path.insert(0, str(IMG))
+    import make_pictures  # the operators helper's render recipe (camera framing, Workbench settings)
+
+    make_pictures.setup_addon()
+    assert bpy.ops.curved_fold.import_pattern(filepath=str(svg)) == {"FINISHED"}
+    curves = list(bpy.context.selected_objects)
+    assert bpy.ops.curved_fold.fold(fold_percent=100.0) == {"FINISHED"}
+    ob = bpy.context.active_object
+    props = ob.curved_fold_mesh
+    for c in curves:
+        c.hide_render = True
+    ob.color = (0.93, 0.9, 0.82, 1)
+    bpy.context.view_layer.update()
+    make_pictures.camera_for([ob], direction=(0.55, -1.0, 0.85), margin=1.08)
+    with tempfile.TemporaryDirectory() as tmp:
+        render_png = Path(tmp) / "render.png"
+        make_pictures.render(render_png, "OBJECT", width=900, height=700)
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.image as mpimg
+        import matplotlib.pyplot as plt
+
+        figures = (
+            f"strain {props.last_strain_mean:.2f} % mean / {props.last_strain_max:.2f} % max, "
+            f"warp {props.last_warp_mean:.2f}° mean, fold-angle error {props.last_fold_error:.1f}° mean, "
+            f"solver {props.last_ms:.0f} ms, {props.last_iterations} iterations"
+            + ("" if props.last_converged else " (NOT converged)")
+        )
+        lines = [f"examples/{svg.name}", figures, *textwrap.wrap(props.last_message, 120)]
+        head = 0.25 * len(lines) + 0.15  # inches of title
+        fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5.0 + head), gridspec_kw={"width_ratios": [1, 1.25]})
+        _draw_pattern(left, svg)
+        right.imshow(mpimg.imread(render_png))
+        right.axis("off")
+        right.set_title(f"folded 100 % ({props.last_faces} faces, ruling mesh, fast solver)", fontsize=11)
+        fig.suptitle("\n".join(lines), fontsize=10.5, color="#a00000" if props.last_message else "black")
+        fig.subplots_adjust(left=0.02, right=0.98, bottom=0.02, top=1 - (head + 0.35) / (5.0 + head), wspace=0.06)
+        png.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(png, dpi=90, facecolor="white")
+    print(f"{svg.name}: {props.last_faces} faces, {figures}")
+    if props.last_message:
+        print(f"{svg.name}: {props.last_message}")
+    print(f"wrote {png}")
+
+
+def picture_step(svg: Path, png: Path) -> bool:
+    """Make the picture of one example in a fresh bpy process (the add-on registers once per process)."""
+    label = f"python tools/demo.py --picture {_show(svg)} {_show(png)}"
+    return run_step(label, [sys.executable, str(Path(__file__).resolve()), "--picture", str(svg), str(png)])
+
+
+def operator_pictures() -> bool:
+    """Run ``docs/img/make_pictures.py`` (fold percents, strain and warp colours) on wavy_pleats or curved_pleats."""
+    pattern = FIXTURE if FIXTURE.is_file() else REPO / "examples" / "curved_pleats.svg"
+    if pattern != FIXTURE:
+        print(f"demo: {FIXTURE} not found; the operator pictures use {_show(pattern)} instead")
+    script = IMG / "make_pictures.py"
+    return run_step(f"python {_show(script)} {_show(pattern)}", [sys.executable, str(script), str(pattern)])
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--examples", type=Path, default=REPO / "examples", help="folder of .svg patterns")
-    parser.add_argument("--out", type=Path, default=REPO / "out", help="output folder")
+    parser.add_argument("--out", type=Path, default=REPO / "out", help="folder for the folded meshes")
+    parser.add_argument("--img", type=Path, default=IMG, help="folder for the pictures")
+    parser.add_argument("--no-pictures", action="store_true", help="fold only, render nothing")
+    parser.add_argument("--picture", nargs=2, type=Path, metavar=("SVG", "PNG"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    svgs = sorted(args.examples.glob("*.svg"))
+    if args.picture:
+        make_picture(args.picture[0].resolve(), args.picture[1].resolve())
+        return 0
+    svgs = sorted(args.examples.resolve().glob("*.svg"))
     if not svgs:
         print(f"demo: no .svg patterns in {args.examples}", file=sys.stderr)
         return 1
-    args.out.mkdir(parents=True, exist_ok=True)
-    commands = available_subcommands()
-    if not commands & {"fold", "discretize"}:
-        print("demo: the command line has neither a 'fold' nor a 'discretize' subcommand yet", file=sys.stderr)
-        return 1
-    failures = 0
+    out = args.out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    failed: list[str] = []
+    start = time.perf_counter()
     for svg in svgs:
-        name = svg.stem
-        print(f"== {svg.relative_to(REPO) if svg.is_relative_to(REPO) else svg} ==", flush=True)
-        if "fold" in commands:
-            ok = run_cli(["fold", str(svg), "--out", str(args.out / f"{name}.fold")])
-            ok = run_cli(["fold", str(svg), "--out", str(args.out / f"{name}.glb")]) and ok
-            if ok:
-                ok = render(args.out / f"{name}.glb", args.out / f"{name}.png")
-        else:
-            ok = run_cli(["discretize", str(svg), "--out", str(args.out / f"{name}.fold")])
-        failures += not ok
-    if "fold" not in commands:
-        print(
-            "demo: STOPPED AFTER DISCRETISING — the 'fold' subcommand (solver) does not exist yet, so out/*.fold are "
-            "flat crease patterns, not folded shapes."
-        )
-    print(f"demo: {len(svgs) - failures}/{len(svgs)} examples done, outputs in {args.out}")
-    return 1 if failures else 0
+        print(f"== {_show(svg)} ==", flush=True)
+        if not fold_example(svg, out):
+            failed.append(f"fold {svg.name}")
+            continue
+        report = json.loads((out / f"{svg.stem}.json").read_text(encoding="utf-8"))
+        if report.get("does_not_fold_as_assigned"):
+            expected = svg.stem == "cannot_fold"
+            print(f"    ({'expected: this pattern cannot fold' if expected else 'UNEXPECTED'}: see the warning above)")
+        if not args.no_pictures and not picture_step(svg, args.img.resolve() / f"example_{svg.stem}.png"):
+            failed.append(f"picture {svg.name}")
+    if not args.no_pictures:
+        print("== operator pictures ==", flush=True)
+        if not operator_pictures():
+            failed.append("docs/img/make_pictures.py")
+    took = time.perf_counter() - start
+    print(f"demo: {len(svgs)} examples, folded meshes in {_show(out)}, pictures in {_show(args.img.resolve())}")
+    if failed:
+        print(f"demo: FAILED: {', '.join(failed)} ({took:.0f} s)")
+        return 1
+    print(f"demo: all steps succeeded ({took:.0f} s)")
+    return 0
 
 
 if __name__ == "__main__":

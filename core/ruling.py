@@ -121,7 +121,10 @@ class EndpointScorer:
         else:
             theta_a = theta_b = np.zeros(len(p))
             scores = np.zeros(len(p), dtype=bool)
-        return (theta_a - theta_b) ** 2, scores
+        # Python's float ** 2 (libm pow) can differ from numpy's square in the last bit: square the scalar way, so
+        # batch and scalar costs are identical
+        diff = (theta_a - theta_b).tolist()
+        return np.fromiter((x**2 for x in diff), dtype=float, count=len(diff)), scores
 
     def costs(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
         """:meth:`cost` of many edges at once (vectorised; fills the same cache, identical values)."""

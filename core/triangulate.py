@@ -172,60 +172,77 @@ def _canonical_triangles(tris: np.ndarray) -> np.ndarray:
     return rot[order]
 
 
+def _incircle_scalar(a: list[float], b: list[float], c: list[float], d: list[float]) -> float:
+    """:func:`incircle` for one quad in plain Python floats: the same operations in the same order, so the same
+    value to the last bit (``np.mean`` over 4 rows adds them in sequence), without numpy's per-call overhead."""
+    cx = (((a[0] + b[0]) + c[0]) + d[0]) / 4.0
+    cy = (((a[1] + b[1]) + c[1]) + d[1]) / 4.0
+    scale = max(abs(p[k] - m) for p in (a, b, c, d) for k, m in ((0, cx), (1, cy))) + 1e-300
+    adx, ady = (a[0] - d[0]) / scale, (a[1] - d[1]) / scale
+    bdx, bdy = (b[0] - d[0]) / scale, (b[1] - d[1]) / scale
+    cdx, cdy = (c[0] - d[0]) / scale, (c[1] - d[1]) / scale
+    adl = adx * adx + ady * ady
+    bdl = bdx * bdx + bdy * bdy
+    cdl = cdx * cdx + cdy * cdy
+    return adl * (bdx * cdy - bdy * cdx) - bdl * (adx * cdy - ady * cdx) + cdl * (adx * bdy - ady * bdx)
+
+
 def legalise(points: np.ndarray, tris: np.ndarray, constrained: set[tuple[int, int]]) -> tuple[np.ndarray, int]:
     """Lawson flips until every non-constraint edge is locally Delaunay, with deterministic cocircular tie-breaks.
 
     A quad whose in-circle value is within :data:`_TIE_TOLERANCE` of zero is a tie: its diagonal must touch the
-    smallest vertex index of the quad. Returns the new triangles and the number of flips. Vectorised check first;
-    the Python flip loop only runs over the (usually few) offending edges and their neighbours.
+    smallest vertex index of the quad. Returns the new triangles and the number of flips. Every interior edge is
+    screened at once on half-edge arrays; the Python flip loop only runs over the (usually few) edges that are not
+    clearly Delaunay (ties and offenders) and the neighbours of the flips it makes.
     """
-    tris = [list(t) for t in tris.tolist()]
+    tris = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
+    n = len(points)
+    empty = np.zeros(0, dtype=np.int64)
+    org, dst, twin, _ = half_edges(tris, n, empty)
+    opp = np.roll(tris, -2, axis=1).reshape(-1)
+    cand = np.flatnonzero((org < dst) & (twin >= 0))  # each interior edge once, in half-edge order
+    if len(cand) == 0:
+        return tris, 0
+    ca, cb, cc, cd = org[cand], dst[cand], opp[cand], opp[twin[cand]]
+    val = incircle(points[ca], points[cb], points[cc], points[cd])
+    pick = np.flatnonzero(val >= -_TIE_TOLERANCE)
+    if len(pick) == 0:
+        return tris, 0
+    stack = list(zip(ca[pick].tolist(), cb[pick].tolist(), strict=True))
+
+    xy = points.tolist()
+    tris_l = tris.tolist()
     owner: dict[tuple[int, int], int] = {}
-    for ti, (a, b, c) in enumerate(tris):
+    for ti, (a, b, c) in enumerate(tris_l):
         owner[(a, b)] = ti
         owner[(b, c)] = ti
         owner[(c, a)] = ti
 
     def third(ti: int, a: int, b: int) -> int:
-        t = tris[ti]
-        for v in t:
-            if v != a and v != b:
-                return v
-        raise AssertionError("degenerate triangle")
+        t = tris_l[ti]
+        return t[0] + t[1] + t[2] - a - b
 
     def wants_flip(a: int, b: int) -> bool:
         """Edge a→b (t1 on its left) should become the other diagonal."""
-        if (min(a, b), max(a, b)) in constrained:
+        if ((a, b) if a < b else (b, a)) in constrained:
             return False
         t1, t2 = owner.get((a, b), -1), owner.get((b, a), -1)
         if t1 < 0 or t2 < 0:
             return False
         c, d = third(t1, a, b), third(t2, b, a)
-        pa, pb, pc, pd = points[a], points[b], points[c], points[d]
+        pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
         # the quad a, d, b, c must be strictly convex: both new triangles (c, a, d), (d, b, c) counter-clockwise
-        if orient(pc, pa, pd) <= 0 or orient(pd, pb, pc) <= 0:
+        if _orient2(pc, pa, pd) <= 0 or _orient2(pd, pb, pc) <= 0:
             return False
-        val = float(incircle(pa, pb, pc, pd))
+        val = _incircle_scalar(pa, pb, pc, pd)
         if val > _TIE_TOLERANCE:
             return True
         if val < -_TIE_TOLERANCE:
             return False
         return min(c, d) < min(a, b)
 
-    # vectorised screening of every interior edge (each undirected edge once)
-    arr = np.asarray(tris, dtype=np.int64)
-    a_, b_ = arr.reshape(-1), np.roll(arr, -1, axis=1).reshape(-1)
-    cand = [(int(a), int(b)) for a, b in zip(a_, b_, strict=True) if a < b and (b, a) in owner]
-    if cand:
-        ca = np.array(cand)
-        c = np.array([third(owner[(a, b)], a, b) for a, b in cand])
-        d = np.array([third(owner[(b, a)], b, a) for a, b in cand])
-        val = incircle(points[ca[:, 0]], points[ca[:, 1]], points[c], points[d])
-        stack = [cand[i] for i in np.flatnonzero(val >= -_TIE_TOLERANCE)]
-    else:
-        stack = []
     flips = 0
-    limit = 50 * len(tris) + 100
+    limit = 50 * len(tris_l) + 100
     while stack:
         a, b = stack.pop()
         if (a, b) not in owner:
@@ -241,15 +258,20 @@ def legalise(points: np.ndarray, tris: np.ndarray, constrained: set[tuple[int, i
         c, d = third(t1, a, b), third(t2, b, a)
         for e in ((a, b), (b, c), (c, a), (b, a), (a, d), (d, b)):
             owner.pop(e, None)
-        tris[t1] = [c, a, d]
-        tris[t2] = [d, b, c]
+        tris_l[t1] = [c, a, d]
+        tris_l[t2] = [d, b, c]
         for ti in (t1, t2):
-            x, y, z = tris[ti]
+            x, y, z = tris_l[ti]
             owner[(x, y)] = ti
             owner[(y, z)] = ti
             owner[(z, x)] = ti
         stack += [(a, d), (d, b), (b, c), (c, a)]
-    return np.asarray(tris, dtype=np.int64).reshape(-1, 3), flips
+    return np.asarray(tris_l, dtype=np.int64).reshape(-1, 3), flips
+
+
+def _orient2(a: list[float], b: list[float], c: list[float]) -> float:
+    """:func:`orient` for one triple of plain floats (same operations)."""
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -449,16 +471,18 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
     n_regions = len(region_ids)
     hull = twin < 0
     outside_seed = set(region[tri_of[hull & ~is_seg]].tolist())
-    adjacency: dict[int, list[tuple[int, bool]]] = {r: [] for r in range(n_regions)}
+    adjacency: list[list[tuple[int, bool]]] = [[] for _ in range(n_regions)]
+    seg_sorted_k = np.argsort(key[:, 0] * n_pts + key[:, 1])  # pattern edge k is row k of key; codes are unique
+    is_border_seg = pattern.assignments[seg_sorted_k] == "B"  # aligned with seg_code
+    he_code = np.minimum(org, dst) * n_pts + np.maximum(org, dst)
     cross = np.flatnonzero((twin >= 0) & is_seg & (org < dst))
     r1s, r2s = region[tri_of[cross]].tolist(), region[tri_of[twin[cross]]].tolist()
-    seg_codes_cross = (org[cross] * n_pts + dst[cross]).tolist()
-    for r1, r2, c in zip(r1s, r2s, seg_codes_cross, strict=True):
+    toggles_l = is_border_seg[np.searchsorted(seg_code, he_code[cross])].tolist()
+    for r1, r2, toggles in zip(r1s, r2s, toggles_l, strict=True):
         if r1 != r2:
-            toggles = pattern.assignments[segment_of[divmod(c, int(n_pts))]] == "B"
             adjacency[r1].append((r2, toggles))
             adjacency[r2].append((r1, toggles))
-    inside = np.full(n_regions, -1, dtype=np.int64)
+    inside = [-1] * n_regions
     queue = []
     for r in sorted(outside_seed):
         inside[r] = 0
@@ -466,10 +490,10 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
     # regions that meet the hull only through constraint edges: the hull edge itself is a border (paper side) or a
     # crease; treat the unbounded side as outside, so a region whose hull edge is a B segment is inside.
     hull_seg = np.flatnonzero(hull & is_seg)
-    lo_h, hi_h = np.minimum(org, dst)[hull_seg].tolist(), np.maximum(org, dst)[hull_seg].tolist()
-    for r, i, j in zip(region[tri_of[hull_seg]].tolist(), lo_h, hi_h, strict=True):
+    hull_border = is_border_seg[np.searchsorted(seg_code, he_code[hull_seg])].tolist()
+    for r, border in zip(region[tri_of[hull_seg]].tolist(), hull_border, strict=True):
         if inside[r] < 0:
-            inside[r] = 1 if pattern.assignments[segment_of[(i, j)]] == "B" else 0
+            inside[r] = 1 if border else 0
             queue.append(r)
     conflict = False
     while queue:
@@ -483,7 +507,7 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
                 conflict = True
     if conflict:
         warnings.append("triangulation: border lines do not separate paper from outside consistently; kept as paper")
-    keep_region = inside == 1
+    keep_region = np.asarray(inside) == 1
     if not keep_region.any():
         raise PatternError("triangulation: no paper left: the border does not enclose any region")
     keep_tri = keep_region[region]
@@ -505,11 +529,12 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
     tris = remap2[tris]
     pts2 = pts[used2]
     vertex_source = used[used2]
-    seg2 = {}
-    for (i, j), k in segment_of.items():
-        a, b = remap2[i], remap2[j]
-        if a >= 0 and b >= 0:
-            seg2[(int(min(a, b)), int(max(a, b)))] = k
+    seg_ij = np.array(list(segment_of), dtype=np.int64).reshape(-1, 2)
+    seg_k = np.fromiter(segment_of.values(), dtype=np.int64, count=len(segment_of))
+    ra, rb = remap2[seg_ij[:, 0]], remap2[seg_ij[:, 1]]
+    keep = (ra >= 0) & (rb >= 0)
+    lo2, hi2 = np.minimum(ra, rb)[keep].tolist(), np.maximum(ra, rb)[keep].tolist()
+    seg2 = dict(zip(zip(lo2, hi2, strict=True), seg_k[keep].tolist(), strict=True))
 
     seg2_code = np.array(sorted(i * len(pts2) + j for i, j in seg2), dtype=np.int64)
     faces, face_loops_, simple = [], [], []

@@ -39,6 +39,7 @@ test: setup lint
 build: setup
 	$(PY) tools/build_extension.py --bundle-triangle --out dist/
 
+# The main job: set up, fold every examples/*.svg into out/ (.fold, .json, .glb), render docs/img/ pictures.
 demo: setup
 	$(PY) tools/demo.py
 

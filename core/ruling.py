@@ -15,8 +15,8 @@ give (θ_a − θ_b)², zero for the discrete bisector. Following the authors' c
 * the candidate with the smallest new cost is swapped, repeatedly, until none is left.
 
 Because every swap strictly lowers the total cost (∞ counted first), the loop terminates. The loop is a priority
-queue with lazy re-evaluation: after a swap only the edges of the triangles around its four vertices are
-re-scored (the valence and the quads change only there).
+queue with lazy re-evaluation: after a swap only the edges opposite its four vertices in the triangles around
+them are re-scored (the valence, the quads and the existing edges change only there).
 
 Speed: the swaps are *decided* on a plain half-edge structure (a dict from directed edge to triangle, Python lists),
 with every edge's cost, quad, convexity and valence test evaluated for the whole mesh at once in numpy at the start
@@ -135,16 +135,10 @@ class EndpointScorer:
         sp, okp = self._endpoints(p, q)
         sq, okq = self._endpoints(q, p)
         value = np.where(okp & okq, sp + sq, np.where(okp, 2.0 * sp, np.where(okq, 2.0 * sq, _INF)))
-        lo, hi = np.minimum(p, q).tolist(), np.maximum(p, q).tolist()
-        cache = self._cost
-        out = value.tolist()
-        for k, key in enumerate(zip(lo, hi, strict=True)):
-            cached = cache.get(key)
-            if cached is None:
-                cache[key] = out[k]
-            else:
-                out[k] = cached
-        return np.asarray(out, dtype=float)
+        # batch and scalar values are bit-identical (tested), so overwriting cached entries changes nothing
+        keys = zip(np.minimum(p, q).tolist(), np.maximum(p, q).tolist(), strict=True)
+        self._cost.update(zip(keys, value.tolist(), strict=True))
+        return value
 
     def endpoint(self, p: int, q: int) -> float | None:
         """(θ_a − θ_b)² at endpoint p of edge pq, or None when p does not score."""
@@ -195,13 +189,19 @@ def _decide_swaps(
 ) -> tuple[list[tuple[int, ...]], list[list[int]], dict[str, int]]:
     """Run the greedy swap loop on a half-edge structure; return the swaps ``(a, c, b, d, t1, t2, f)`` in order (edge
     ac becomes bd; t1, t2 the two triangle slots of the quad, f its crease-pattern face), the final triangles (CCW,
-    same slots as the input) and loop statistics."""
+    same slots as the input) and loop statistics.
+
+    Keys are integers: a directed edge x→y is ``x·n + y``, an undirected edge the code of (min, max) (so codes sort
+    like the vertex pairs, and heap ties break exactly as on pairs), a (vertex, face) pair ``v·n_faces + f``.
+    """
     n = len(vertices)
+    t = len(triangles)
+    n_faces = int(triangle_face.max()) + 1 if t else 1
     xy = vertices.tolist()
     scale2 = float(np.sum((vertices.max(0) - vertices.min(0)) ** 2)) or 1.0
     eps = 1e-12 * scale2
-    seg_code = np.unique(np.sort(segments, axis=1) @ np.array([n, 1], dtype=np.int64)) if len(segments) else None
-    constrained = {(int(a), int(b)) for a, b in np.sort(segments, axis=1).tolist()}
+    seg_code = np.unique(np.sort(segments, axis=1) @ np.array([n, 1], dtype=np.int64))
+    constrained = set(seg_code.tolist())
 
     # half-edges h = 3 * triangle + k, from corner k to corner k + 1
     org = triangles.reshape(-1)
@@ -213,18 +213,14 @@ def _decide_swaps(
     pos = np.clip(np.searchsorted(code[order], twin_code), 0, len(code) - 1)
     twin = np.where(code[order][pos] == twin_code, order[pos], -1)
     lo, hi = np.minimum(org, dst), np.maximum(org, dst)
-    is_seg = np.isin(lo * n + hi, seg_code) if seg_code is not None else np.zeros(len(org), dtype=bool)
+    is_seg = np.isin(lo * n + hi, seg_code)
 
     # facet valence per (vertex, crease-pattern face): facet edges = interior non-segment edges, counted once
     face_of_he = np.repeat(triangle_face, 3)
     facet_once = (twin >= 0) & ~is_seg & (org < dst)
-    valence: dict[tuple[int, int], int] = {}
-    for v, f in zip(
-        np.concatenate([org[facet_once], dst[facet_once]]).tolist(),
-        np.concatenate([face_of_he[facet_once], face_of_he[facet_once]]).tolist(),
-        strict=True,
-    ):
-        valence[(v, f)] = valence.get((v, f), 0) + 1
+    vf = np.concatenate([org[facet_once], dst[facet_once]]) * n_faces + np.tile(face_of_he[facet_once], 2)
+    vf_code, vf_count = np.unique(vf, return_counts=True)
+    valence: dict[int, int] = dict(zip(vf_code.tolist(), vf_count.tolist(), strict=True))
 
     # first evaluation of every edge at once (each interior non-segment edge through its half-edge with org < dst)
     stats = {"convex": 0, "valence": 0}
@@ -234,15 +230,15 @@ def _decide_swaps(
     nlo, nhi = np.minimum(b_, d_), np.maximum(b_, d_)
     new_cost = scorer.costs(b_, d_)
     old_cost = scorer.costs(a_, c_)
-    ok = ~np.isin(nlo * n + nhi, seg_code) if seg_code is not None else np.ones(len(cand), dtype=bool)
+    ok = ~np.isin(nlo * n + nhi, seg_code)
     ok &= new_cost < old_cost
     stats["convex"] += int(np.count_nonzero(ok))
     pa, pb, pc, pd = vertices[a_], vertices[b_], vertices[c_], vertices[d_]
     ok &= _strictly_crosses(_orient_v(pb, pd, pa), _orient_v(pb, pd, pc), eps)
     ok &= _strictly_crosses(_orient_v(pa, pc, pb), _orient_v(pa, pc, pd), eps)
     f_ = face_of_he[cand]
-    vb = np.array([valence.get((b, f), 0) for b, f in zip(b_.tolist(), f_.tolist(), strict=True)], dtype=np.int64)
-    vd = np.array([valence.get((d, f), 0) for d, f in zip(d_.tolist(), f_.tolist(), strict=True)], dtype=np.int64)
+    vb = _lookup(vf_code, vf_count, b_ * n_faces + f_)
+    vd = _lookup(vf_code, vf_count, d_ * n_faces + f_)
     too_many = ok & ((vb > max_valence) | (vd > max_valence))
     stats["valence"] += int(np.count_nonzero(too_many))
     ok &= ~too_many
@@ -251,40 +247,52 @@ def _decide_swaps(
     # the mutable half-edge structure: directed edge -> triangle; an id per edge instance (a flipped edge dies)
     tris = triangles.tolist()
     tface = triangle_face.tolist()
-    owner: dict[tuple[int, int], int] = {}
-    for ti, (x, y, z) in enumerate(tris):
-        owner[(x, y)] = ti
-        owner[(y, z)] = ti
-        owner[(z, x)] = ti
-    vert_tris: list[set[int]] = [set() for _ in range(n)]
-    for ti, tri in enumerate(tris):
-        for v in tri:
-            vert_tris[v].add(ti)
-    edge_id: dict[tuple[int, int], int] = {}
+    owner: dict[int, int] = dict(zip(code.tolist(), (np.arange(3 * t) // 3).tolist(), strict=True))
+    by_vertex = np.argsort(org, kind="stable")
+    fan_start = np.searchsorted(org[by_vertex], np.arange(n + 1)).tolist()
+    fan_tris = (by_vertex // 3).tolist()
+    fans: dict[int, set[int]] = {}  # vertex -> its triangles, materialised on first use (before any change to it)
+
+    def fan(v: int) -> set[int]:
+        s = fans.get(v)
+        if s is None:
+            s = fans[v] = set(fan_tris[fan_start[v] : fan_start[v + 1]])
+        return s
+
+    edge_id: dict[int, int] = {}
     next_id = [0]
 
-    def instance(key: tuple[int, int]) -> int:
+    def instance(key: int) -> int:
         eid = edge_id.get(key)
         if eid is None:
             eid = edge_id[key] = next_id[0]
             next_id[0] += 1
         return eid
 
-    def evaluate(a: int, c: int) -> tuple[float, tuple[int, int]] | None:
-        """The new cost if edge ac is a swap candidate, with the new edge's key; None otherwise."""
-        if (a, c) in constrained:
+    cost_cache = scorer._cost
+    cost = scorer.cost
+
+    def evaluate(a: int, c: int) -> tuple[float, int] | None:
+        """The new cost if edge ac (a < c) is a swap candidate, with the new edge's code; None otherwise."""
+        if a * n + c in constrained:
             return None
-        t1, t2 = owner.get((a, c)), owner.get((c, a))
+        t1, t2 = owner.get(a * n + c), owner.get(c * n + a)
         if t1 is None or t2 is None:
             return None
         tr1, tr2 = tris[t1], tris[t2]
         b = tr1[0] + tr1[1] + tr1[2] - a - c
         d = tr2[0] + tr2[1] + tr2[2] - a - c
-        key = (b, d) if b < d else (d, b)
+        bd = (b, d) if b < d else (d, b)
+        key = bd[0] * n + bd[1]
         if key in constrained:
             return None
-        new = scorer.cost(b, d)
-        if not new < scorer.cost(a, c):
+        new = cost_cache.get(bd)
+        if new is None:
+            new = cost(b, d)
+        old = cost_cache.get((a, c))
+        if old is None:
+            old = cost(a, c)
+        if not new < old:
             return None
         stats["convex"] += 1
         pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
@@ -295,77 +303,90 @@ def _decide_swaps(
         if not ((o3 > eps and o4 < -eps) or (o3 < -eps and o4 > eps)):
             return None
         f = tface[t1]
-        if valence.get((b, f), 0) > max_valence or valence.get((d, f), 0) > max_valence:
+        if valence.get(b * n_faces + f, 0) > max_valence or valence.get(d * n_faces + f, 0) > max_valence:
             stats["valence"] += 1
             return None
-        if (b, d) in owner or (d, b) in owner:
+        if b * n + d in owner or d * n + b in owner:
             return None
         return new, key
 
-    heap: list[tuple[float, tuple[int, int], tuple[int, int], int, int]] = []
+    heap: list[tuple[float, int, int, int, int]] = []
     counter = 0
     for k in np.flatnonzero(ok).tolist():
-        key = (int(a_[k]), int(c_[k]))
+        key = int(a_[k]) * n + int(c_[k])
         counter += 1
-        heap.append((float(new_cost[k]), (int(nlo[k]), int(nhi[k])), key, counter, instance(key)))
+        heap.append((float(new_cost[k]), int(nlo[k]) * n + int(nhi[k]), key, counter, instance(key)))
     heapq.heapify(heap)
-
-    def push(key: tuple[int, int]) -> None:
-        nonlocal counter
-        r = evaluate(*key)
-        if r is not None:
-            counter += 1
-            heapq.heappush(heap, (r[0], r[1], key, counter, instance(key)))
 
     swaps: list[tuple[int, ...]] = []
     n_edges = int(np.count_nonzero(twin < 0)) + int(np.count_nonzero(twin >= 0)) // 2
     cap = max_swaps if max_swaps is not None else 100 * max(1, n_edges)
     while heap and len(swaps) < cap:
-        cost, key, old, _n, eid = heapq.heappop(heap)
+        cost_q, key, old, _n, eid = heapq.heappop(heap)
         if edge_id.get(old) != eid:  # the edge this entry was queued for has been flipped away
             continue
-        r = evaluate(*old)
+        a, c = divmod(old, n)
+        r = evaluate(a, c)
         if r is None:
             continue
-        if r[0] != cost:  # stale entry: its value changed since it was queued
-            push(old)
+        if r[0] != cost_q:  # stale entry: its value changed since it was queued
+            counter += 1
+            heapq.heappush(heap, (r[0], r[1], old, counter, eid))
             continue
-        a, c = old
-        t1, t2 = owner[(a, c)], owner[(c, a)]
+        t1, t2 = owner[a * n + c], owner[c * n + a]
         tr1, tr2 = tris[t1], tris[t2]
         b = tr1[0] + tr1[1] + tr1[2] - a - c
         d = tr2[0] + tr2[1] + tr2[2] - a - c
         f = tface[t1]
         # t1 = (a, c, b) and t2 = (c, a, d), CCW; the quad is a, d, c, b; the new triangles (a, d, b), (d, c, b)
         for x, y, z in (tr1, tr2):
-            del owner[(x, y)], owner[(y, z)], owner[(z, x)]
+            del owner[x * n + y], owner[y * n + z], owner[z * n + x]
         tris[t1], tris[t2] = [a, d, b], [d, c, b]
         for ti in (t1, t2):
             x, y, z = tris[ti]
-            owner[(x, y)] = ti
-            owner[(y, z)] = ti
-            owner[(z, x)] = ti
-        vert_tris[a].discard(t2)
-        vert_tris[c].discard(t1)
-        vert_tris[b].add(t2)
-        vert_tris[d].add(t1)
+            owner[x * n + y] = ti
+            owner[y * n + z] = ti
+            owner[z * n + x] = ti
+        fan(a).discard(t2)
+        fan(c).discard(t1)
+        fan(b).add(t2)
+        fan(d).add(t1)
         del edge_id[old]
         instance(key)
         swaps.append((a, c, b, d, t1, t2, f))
-        valence[(a, f)] -= 1
-        valence[(c, f)] -= 1
-        valence[(b, f)] = valence.get((b, f), 0) + 1
-        valence[(d, f)] = valence.get((d, f), 0) + 1
-        seen: set[tuple[int, int]] = set()
+        valence[a * n_faces + f] -= 1
+        valence[c * n_faces + f] -= 1
+        valence[b * n_faces + f] = valence.get(b * n_faces + f, 0) + 1
+        valence[d * n_faces + f] = valence.get(d * n_faces + f, 0) + 1
+        # Re-evaluate what the swap can have changed: an edge's evaluation depends on its two triangles, on the
+        # facet valence of its two opposite vertices and on whether the edge between them exists. Triangles changed
+        # only in the quad, valence only at a, b, c, d, and the only edge created/removed joins b, d / a, c; so the
+        # edges to re-evaluate are those opposite a, b, c or d in a triangle around it (this includes the quad's
+        # five edges). Re-evaluating more would only queue duplicates of entries already in the heap.
+        seen: set[int] = set()
         for vi in (a, c, b, d):
-            for ti in vert_tris[vi]:
+            for ti in fan(vi):
                 x, y, z = tris[ti]
-                for p, q in ((x, y), (y, z), (z, x)):
-                    e = (p, q) if p < q else (q, p)
-                    if e not in seen:
-                        seen.add(e)
-                        push(e)
+                p, q = (y, z) if vi == x else ((z, x) if vi == y else (x, y))
+                if p > q:
+                    p, q = q, p
+                e = p * n + q
+                if e in seen:
+                    continue
+                seen.add(e)
+                r = evaluate(p, q)
+                if r is not None:
+                    counter += 1
+                    heapq.heappush(heap, (r[0], r[1], e, counter, instance(e)))
     return swaps, tris, stats
+
+
+def _lookup(codes: np.ndarray, counts: np.ndarray, query: np.ndarray) -> np.ndarray:
+    """``counts`` of each ``query`` code among the sorted ``codes`` (0 when absent)."""
+    if len(codes) == 0:
+        return np.zeros(len(query), dtype=np.int64)
+    pos = np.clip(np.searchsorted(codes, query), 0, len(codes) - 1)
+    return np.where(codes[pos] == query, counts[pos], 0)
 
 
 def ruling_swaps(
@@ -405,7 +426,7 @@ def ruling_swaps(
         bm.verts.index_update()
         for tri in triangles.tolist():
             bm.faces.new([verts[i] for i in tri])
-        for batch in _independent_runs(swaps):
+        for batch in _independent_runs(swaps):  # levels of disjoint rotations, in dependency order
             edges = []
             for a, c, *_ in batch:
                 e = bm.edges.get((verts[a], verts[c]))
@@ -432,23 +453,22 @@ def ruling_swaps(
 
 
 def _independent_runs(swaps: list[tuple[int, ...]]) -> list[list[tuple[int, ...]]]:
-    """Split the swap sequence into consecutive runs whose quads share no triangle.
-
-    The swaps of one run commute (disjoint quads), so one ``rotate_edges`` call per run gives the same BMesh as one
-    call per swap (``rotate_edges`` handles edges with disjoint face pairs one after another in the given order),
-    while paying the operator's per-call set-up (tool-flag layers over the whole mesh) once per run.
+    """Group the swap sequence into levels of swaps whose quads share no triangle, respecting the order of swaps
+    that do: a swap's level is one more than the highest level of the earlier swaps that touched one of its two
+    triangles. Swaps in one level are disjoint rotations, which commute, so applying the levels in order gives the
+    same triangulation as applying the swaps one by one, while ``rotate_edges`` pays its per-call set-up (tool-flag
+    layers over the whole mesh) once per level instead of once per swap.
     """
-    runs: list[list[tuple[int, ...]]] = []
-    used: set[int] = set()
+    level_of_slot: dict[int, int] = {}
+    levels: list[list[tuple[int, ...]]] = []
     for sw in swaps:
         t1, t2 = sw[4], sw[5]
-        if not runs or t1 in used or t2 in used:
-            runs.append([])
-            used = set()
-        runs[-1].append(sw)
-        used.add(t1)
-        used.add(t2)
-    return runs
+        lv = max(level_of_slot.get(t1, -1), level_of_slot.get(t2, -1)) + 1
+        level_of_slot[t1] = level_of_slot[t2] = lv
+        if lv == len(levels):
+            levels.append([])
+        levels[lv].append(sw)
+    return levels
 
 
 def _canonical(tris: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ from .forces import characteristic_force, evaluate
 from .mesh import FoldMesh
 from .model import BarHingeModel, build_model
 from .solver_faithful import SolverError, faithful_solve, time_step
+from .solver_linalg import single_threaded_blas
 from .solver_newton import HessianAssembler, newton_solve
 
 METHODS = ("fast", "faithful", "isometric")
@@ -63,7 +64,8 @@ class FoldResult:
     (``nan`` on edges with fewer than two triangles); ``energy`` in normalised units; ``residual`` scale-free.
 
     ``force_evaluations`` counts every evaluation of the model (gradient or energy-only, line search included);
-    ``hessian_assemblies`` and ``linear_solves`` are reported separately (0 for the faithful solver).
+    ``hessian_assemblies`` (assembly + block factorisation), ``linear_solves`` (applications of a factorisation) and
+    ``hessian_products`` (matrix-free CG products) are reported separately (0 for the faithful solver).
     """
 
     positions: np.ndarray
@@ -78,6 +80,7 @@ class FoldResult:
     method: str
     hessian_assemblies: int = 0
     linear_solves: int = 0
+    hessian_products: int = 0
     theta: np.ndarray = field(default_factory=lambda: np.zeros(0))
     velocities: np.ndarray | None = None
     dt: float | None = None
@@ -190,18 +193,8 @@ class Solver:
                 velocities=v,
                 dt=self.dt,
             )
-        x, theta, ev, st, lam = newton_solve(
-            model,
-            x0,
-            theta_prev,
-            percent,
-            force_scale=self.force_scale,
-            tolerance=s.tolerance,
-            max_iterations=s.max_iterations,
-            assembler=self.assembler,
-            time_limit=s.time_limit,
-            lm_lambda=self.lm_lambda,
-        )
+        with single_threaded_blas():
+            x, theta, ev, st, lam = self._newton(x0, theta_prev, percent)
         self.lm_lambda = min(max(lam, 1e-6), 1e-2)
         if not np.all(np.isfinite(x)):
             raise SolverError(f"fast solver produced non-finite positions ({st.message})")
@@ -219,7 +212,24 @@ class Solver:
             method=self.method,
             hessian_assemblies=st.hessian_assemblies,
             linear_solves=st.linear_solves,
+            hessian_products=st.hessian_products,
             theta=theta,
+        )
+
+    def _newton(self, x0: np.ndarray, theta_prev: np.ndarray, percent: float):
+        s = self.settings
+        model = self.model
+        return newton_solve(
+            model,
+            x0,
+            theta_prev,
+            percent,
+            force_scale=self.force_scale,
+            tolerance=s.tolerance,
+            max_iterations=s.max_iterations,
+            assembler=self.assembler,
+            time_limit=s.time_limit,
+            lm_lambda=self.lm_lambda,
         )
 
 

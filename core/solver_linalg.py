@@ -12,7 +12,62 @@ that every block operation is one dense LAPACK/BLAS call; elimination is block T
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import glob
+import os
+from collections.abc import Iterator
+
 import numpy as np
+
+_BLAS_CONTROL: tuple | None = None
+
+
+def _blas_control() -> tuple:
+    """``(get, set)`` thread-count functions of the OpenBLAS that numpy loaded, or ``()`` if none is found.
+
+    numpy's wheels bundle OpenBLAS in ``numpy.libs`` (symbols with a ``64_`` suffix); this is what ``threadpoolctl``
+    does, without the dependency.
+    """
+    global _BLAS_CONTROL
+    if _BLAS_CONTROL is None:
+        _BLAS_CONTROL = ()
+        base = os.path.dirname(os.path.dirname(np.__file__))
+        for path in glob.glob(os.path.join(base, "numpy.libs", "libopenblas*")) + glob.glob(
+            os.path.join(os.path.dirname(np.__file__), ".libs", "libopenblas*")
+        ):
+            try:
+                lib = ctypes.CDLL(path)
+            except OSError:
+                continue
+            for suffix in ("64_", ""):
+                get = getattr(lib, "openblas_get_num_threads" + suffix, None)
+                set_ = getattr(lib, "openblas_set_num_threads" + suffix, None)
+                if get is not None and set_ is not None:
+                    _BLAS_CONTROL = (get, set_)
+                    return _BLAS_CONTROL
+    return _BLAS_CONTROL
+
+
+@contextlib.contextmanager
+def single_threaded_blas() -> Iterator[None]:
+    """Run the block (≈100–300 unknowns) BLAS/LAPACK calls on one thread, restoring the previous count after.
+
+    Measured on the 2-core test machine: multi-threaded OpenBLAS spends most of its time synchronising on blocks of
+    this size (an inverse of a 150×150 block 19 ms with 2 threads vs 5 ms with 1 under load), and its spinning
+    threads slow the following small products too. A no-op when numpy's OpenBLAS is not found.
+    """
+    control = _blas_control()
+    if not control:
+        yield
+        return
+    get, set_ = control
+    previous = int(get())
+    set_(1)
+    try:
+        yield
+    finally:
+        set_(previous)
 
 
 def _csr(n: int, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -136,43 +191,68 @@ class BlockTridiagonal:
             out[self.dofs[k]] = np.diag(d)
         return out
 
-    def solve(self, storage: np.ndarray, rhs: np.ndarray, shift: np.ndarray | float = 0.0) -> np.ndarray:
-        """Solve ``(A + diag(shift)) x = rhs`` (natural dof order, length ``3n``) by block Thomas elimination.
+    def factor(self, storage: np.ndarray, shift: np.ndarray | float = 0.0) -> BlockFactor:
+        """Block-Thomas factorisation of ``A + diag(shift)``, kept for cheap repeated solves.
 
-        Raises ``np.linalg.LinAlgError`` for a singular block; the caller increases the shift.
+        For every block the inverse of its Schur complement ``S_k`` and ``X_k = S_k⁻¹ B_kᵀ`` are stored, so one
+        solve is only matrix–vector products (about ``3 Σ s_k²`` flops), cheap enough to serve as the
+        preconditioner of conjugate gradients over several Newton iterations and animation frames.
+        Raises ``np.linalg.LinAlgError`` for a singular or non-finite block; the caller increases the shift.
         """
         shift_vec = np.broadcast_to(np.asarray(shift, dtype=np.float64), (3 * self.n_nodes,))
         K = len(self.blocks)
-        X: list[np.ndarray] = []
-        Z: list[np.ndarray] = []
-        subs: list[np.ndarray] = []
-        prev_X = prev_z = prev_B = None
+        inverses: list[np.ndarray] = []
+        xs: list[np.ndarray | None] = []
+        subs: list[np.ndarray | None] = []
+        prev_X = prev_B = None
         for k in range(K):
             s = self.sizes[k]
             D = storage[self.diag_offset[k] : self.diag_offset[k] + s * s].reshape(s, s)
-            # the diagonal blocks were filled from both triangles; keep them exactly symmetric
-            S = 0.5 * (D + D.T)
+            S = 0.5 * (D + D.T)  # filled from both triangles; keep it exactly symmetric
             S[np.diag_indices(s)] += shift_vec[self.dofs[k]]
-            g = rhs[self.dofs[k]].copy()
             if k > 0:
                 S -= prev_B @ prev_X
-                g -= prev_B @ prev_z
+            Sinv = np.linalg.inv(S)
+            if not np.all(np.isfinite(Sinv)):
+                raise np.linalg.LinAlgError(f"non-finite inverse of block {k}")
+            inverses.append(Sinv)
             if k < K - 1:
                 B = storage[self.sub_offset[k] : self.sub_offset[k] + self.sizes[k + 1] * s].reshape(
                     self.sizes[k + 1], s
                 )
-                sol = np.linalg.solve(S, np.column_stack([B.T, g]))
-                prev_X, prev_z, prev_B = sol[:, :-1], sol[:, -1], B
+                prev_X, prev_B = Sinv @ B.T, B
             else:
-                prev_z = np.linalg.solve(S, g)
-                prev_X = None
-            X.append(prev_X)
-            Z.append(prev_z)
+                prev_X = prev_B = None
+            xs.append(prev_X)
             subs.append(prev_B)
-        out = np.empty(3 * self.n_nodes)
+        return BlockFactor(self.dofs, inverses, xs, subs, 3 * self.n_nodes)
+
+    def solve(self, storage: np.ndarray, rhs: np.ndarray, shift: np.ndarray | float = 0.0) -> np.ndarray:
+        """Solve ``(A + diag(shift)) x = rhs`` (natural dof order, length ``3n``) by block Thomas elimination."""
+        return self.factor(storage, shift).apply(rhs)
+
+
+class BlockFactor:
+    """A block-Thomas factorisation (see :meth:`BlockTridiagonal.factor`); :meth:`apply` solves with it."""
+
+    def __init__(self, dofs, inverses, xs, subs, size: int):
+        self.dofs, self.inverses, self.xs, self.subs, self.size = dofs, inverses, xs, subs, size
+
+    def apply(self, rhs: np.ndarray) -> np.ndarray:
+        """``(A + diag(shift))⁻¹ rhs`` for a flat ``3n`` vector."""
+        K = len(self.inverses)
+        Z: list[np.ndarray] = []
+        prev_z = None
+        for k in range(K):
+            g = rhs[self.dofs[k]]
+            if k > 0:
+                g = g - self.subs[k - 1] @ prev_z
+            prev_z = self.inverses[k] @ g
+            Z.append(prev_z)
+        out = np.empty(self.size)
         nxt = Z[-1]
         out[self.dofs[-1]] = nxt
         for k in range(K - 2, -1, -1):
-            nxt = Z[k] - X[k] @ nxt
+            nxt = Z[k] - self.xs[k] @ nxt
             out[self.dofs[k]] = nxt
         return out

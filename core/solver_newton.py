@@ -6,8 +6,11 @@ dynamics towards it. Each iteration:
 1. evaluates the exact forces ``F = −∇E`` and the per-element Jacobians;
 2. assembles a positive semi-definite Gauss–Newton Hessian: bar blocks ``k (d̂d̂ᵀ + max(0, 1 − L0/ℓ)(I − d̂d̂ᵀ))``
    (the geometric term is kept where it is positive), ``k ∇θ ∇θᵀ`` per hinge, ``k_f ∇α ∇αᵀ`` per face corner;
-3. solves ``(H + λ I) p = F`` with the numpy-only block-tridiagonal solver (``core.solver_linalg``); ``λ`` is the
-   Levenberg–Marquardt damping, which also removes the six rigid-body null modes;
+3. solves ``(H + λ I) p = F`` (``λ`` is the Levenberg–Marquardt damping, which also removes the six rigid-body null
+   modes) by conjugate gradients with matrix-free products ``H v`` (``forces.hessian_matvec``), preconditioned by a
+   block-tridiagonal factorisation (``core.solver_linalg``) of an *earlier* ``H + λ I``. The factorisation is
+   rebuilt only when CG needs more than ``PCG_MAX`` iterations, so warm-started solves (animation frames, later
+   Newton iterations) mostly cost a few matrix-vector products instead of an assembly and a factorisation;
 4. accepts ``x + a p`` by an Armijo backtracking line search on the energy (θ unwrapped against the current θ),
    shrinking λ after easy steps and growing it after failures. Steps are capped to a fraction of the model size so
    a 0 → 100 % jump cannot throw hinges through each other in one step.
@@ -23,12 +26,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .forces import Evaluation, evaluate
+from .forces import Evaluation, evaluate, hessian_matvec
 from .model import BarHingeModel
-from .solver_linalg import BlockTridiagonal
+from .solver_linalg import BlockFactor, BlockTridiagonal
 
 MAX_STEP = 0.25
 """Largest nodal displacement of one Newton step, in normalised units (the model fits in a unit sphere)."""
+
+PCG_MAX = 12
+"""CG iterations allowed with a stale preconditioner before the factorisation is rebuilt."""
+
+PCG_RTOL = 1e-2
+"""Relative CG residual of the inexact Newton step (the outer iteration corrects what is left)."""
 
 
 class HessianAssembler:
@@ -50,6 +59,8 @@ class HessianAssembler:
             np.repeat(tri, 3, axis=1).reshape(-1), np.tile(tri, (1, 3)).reshape(-1)
         ).reshape(len(tri), 3, 3, 3, 3)
         self.assemblies = 0
+        self.factor: BlockFactor | None = None
+        self.last_cg_iterations = 0
 
     def assemble(self, ev: Evaluation) -> np.ndarray:
         """Gauss–Newton Hessian storage from an evaluation made with ``jacobians=True``."""
@@ -78,6 +89,7 @@ class NewtonStats:
     energy_evaluations: int = 0
     hessian_assemblies: int = 0
     linear_solves: int = 0
+    hessian_products: int = 0
     converged: bool = False
     residual: float = float("inf")
     message: str = ""
@@ -125,19 +137,17 @@ def newton_solve(
             stats.message = f"not converged: residual {residual:.2e} after {it} iterations (time limit {time_limit}s)"
             break
         stats.iterations = it + 1
-        H = assembler.assemble(ev)
-        stats.hessian_assemblies += 1
         rhs = ev.forces.reshape(-1)
         accepted = False
         for _attempt in range(12):
             try:
-                p = assembler.matrix.solve(H, rhs, lam).reshape(-1, 3)
-                stats.linear_solves += 1
+                p = _step(model, assembler, ev, rhs, lam, stats).reshape(-1, 3)
             except np.linalg.LinAlgError:
-                stats.linear_solves += 1
+                assembler.factor = None
                 lam *= 10.0
                 continue
             if not np.all(np.isfinite(p)):
+                assembler.factor = None
                 lam *= 10.0
                 continue
             biggest = float(np.max(np.linalg.norm(p, axis=1)))
@@ -176,5 +186,42 @@ def newton_solve(
         x = trial
         ev = evaluate(model, x, tev.theta, percent, jacobians=True)
         stats.force_evaluations += 1
-    stats.hessian_assemblies = stats.hessian_assemblies
     return x, ev.theta, ev, stats, lam / force_scale
+
+
+def _step(
+    model: BarHingeModel, assembler: HessianAssembler, ev: Evaluation, rhs: np.ndarray, lam: float, stats: NewtonStats
+) -> np.ndarray:
+    """Solve ``(H + λ I) p = rhs``: CG preconditioned by the cached factorisation, refactorised when CG stalls."""
+    n = model.n_nodes
+    if assembler.factor is not None and assembler.last_cg_iterations < PCG_MAX:
+        p = np.zeros_like(rhs)
+        r = rhs.copy()
+        z = assembler.factor.apply(r)
+        stats.linear_solves += 1
+        d = z.copy()
+        rz = float(r @ z)
+        goal = PCG_RTOL * float(np.linalg.norm(rhs))
+        for cg in range(PCG_MAX):
+            assembler.last_cg_iterations = cg + 1
+            q = hessian_matvec(model, ev, d.reshape(n, 3)).reshape(-1) + lam * d
+            stats.hessian_products += 1
+            dq = float(d @ q)
+            if dq <= 0 or not np.isfinite(dq):
+                break
+            a = rz / dq
+            p += a * d
+            r -= a * q
+            if float(np.linalg.norm(r)) <= goal:
+                return p
+            z = assembler.factor.apply(r)
+            stats.linear_solves += 1
+            rz_new = float(r @ z)
+            d = z + (rz_new / rz) * d
+            rz = rz_new
+    H = assembler.assemble(ev)
+    stats.hessian_assemblies += 1
+    assembler.factor = assembler.matrix.factor(H, lam)
+    assembler.last_cg_iterations = 0
+    stats.linear_solves += 1
+    return assembler.factor.apply(rhs)

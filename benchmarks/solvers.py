@@ -1,0 +1,274 @@
+"""Fast vs faithful solver benchmark over the Origami Simulator fixtures and the examples (issue 4).
+
+For every case: both solvers' iterations, force evaluations, wall ms, residual and energy, the RMS difference of
+their shapes after rigid (Kabsch) alignment ÷ the sheet diagonal, the strain, and the isometric solver's strain.
+The faithful run is capped (seconds) and reports the residual it reached where capped. Results are printed as a
+table and written into the generated section of ``docs/solver.md``.
+
+Run: ``.venv/bin/python -m curved_fold.benchmarks.solvers [--quick] [--no-write]`` (or as a script).
+Functions for other tools (``make bench``): :func:`run_case`, :func:`run_all`, :func:`format_table`,
+:func:`write_docs`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+if __package__ in (None, ""):  # run as a script: make the add-on importable as ``curved_fold``
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+    __package__ = "curved_fold.benchmarks"
+
+from curved_fold.core.meshing import build_mesh  # noqa: E402
+from curved_fold.core.pattern import CreasePattern  # noqa: E402
+from curved_fold.core.reader import read_pattern  # noqa: E402
+from curved_fold.core.solver import Solver, SolverSettings, rigid_rms  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+FIXTURES = REPO.parent / "shared" / "fixtures" / "origami-simulator"
+EXAMPLES = REPO / "examples"
+DOC = REPO / "docs" / "solver.md"
+BEGIN, END = "<!-- BEGIN GENERATED: benchmarks/solvers.py -->", "<!-- END GENERATED: benchmarks/solvers.py -->"
+
+BIG = ("shell14.svg", "CircularPleat-antiFacet.svg", "huffmanTower.svg", "Rotating_Star.svg", "Carved_Cylinder.svg")
+"""Fixtures where the faithful model would run for minutes: capped shorter in the benchmark."""
+
+
+def _strain_mean_pct(mesh, positions: np.ndarray) -> float:
+    from curved_fold.core.metrics import summary
+
+    return float(summary(mesh, positions)["strain_mean_pct"])
+
+
+def run_case(
+    source: str | Path | CreasePattern,
+    percent: float = 0.6,
+    *,
+    mesh_type: str = "ruling",
+    faithful_seconds: float = 20.0,
+    faithful: bool = True,
+    isometric: bool = True,
+    tolerance: float = 1e-6,
+) -> dict[str, Any]:
+    """Fold one pattern with the fast, faithful (capped) and isometric solvers; return the figures as a dict.
+
+    ``source`` is a path (.svg/.fold/.blend) or a pattern; ``percent`` is 1.0 for 100 %. All solvers start from the
+    same (flat) state and use the same scale-free residual criterion ``tolerance``.
+    """
+    name = Path(source).name if not isinstance(source, CreasePattern) else "pattern"
+    pattern = read_pattern(source) if not isinstance(source, CreasePattern) else source
+    mesh = build_mesh(pattern, mesh_type=mesh_type)
+    diag = float(mesh.diagonal)
+    row: dict[str, Any] = {"case": name, "percent": percent, "faces": int(mesh.n_faces), "nodes": mesh.n_vertices}
+    settings = SolverSettings(tolerance=tolerance)
+    fast_solver = Solver(mesh, settings, "fast")
+    t0 = time.perf_counter()
+    fast = fast_solver.solve(percent)
+    row.update(
+        fast_ms=(time.perf_counter() - t0) * 1000.0,
+        fast_iterations=fast.iterations,
+        fast_force_evaluations=fast.force_evaluations,
+        fast_assemblies=fast.hessian_assemblies,
+        fast_linear_solves=fast.linear_solves,
+        fast_converged=fast.converged,
+        fast_residual=fast.residual,
+        fast_energy=fast.energy,
+        fast_strain_pct=_strain_mean_pct(mesh, fast.positions),
+    )
+    if faithful:
+        slow_settings = SolverSettings(tolerance=tolerance, time_limit=faithful_seconds, max_steps=10_000_000)
+        t0 = time.perf_counter()
+        slow = Solver(mesh, slow_settings, "faithful").solve(percent)
+        row.update(
+            faithful_ms=(time.perf_counter() - t0) * 1000.0,
+            faithful_steps=slow.iterations,
+            faithful_force_evaluations=slow.force_evaluations,
+            faithful_converged=slow.converged,
+            faithful_residual=slow.residual,
+            faithful_energy=slow.energy,
+            faithful_dt=slow.dt,
+            rms_over_diagonal=rigid_rms(fast.positions, slow.positions) / diag,
+        )
+        row["wall_ratio"] = row["faithful_ms"] / max(row["fast_ms"], 1e-9)
+        row["evaluation_ratio"] = row["faithful_force_evaluations"] / max(row["fast_force_evaluations"], 1)
+        lower = "fast" if fast.energy < slow.energy - 1e-9 * max(abs(slow.energy), 1.0) else "same/faithful"
+        row["lower_energy"] = lower
+    if isometric:
+        t0 = time.perf_counter()
+        iso = Solver(mesh, SolverSettings(tolerance=tolerance, max_iterations=300), "isometric").solve(percent)
+        row.update(
+            isometric_ms=(time.perf_counter() - t0) * 1000.0,
+            isometric_iterations=iso.iterations,
+            isometric_converged=iso.converged,
+            isometric_residual=iso.residual,
+            isometric_strain_pct=_strain_mean_pct(mesh, iso.positions),
+        )
+    return row
+
+
+def cases(quick: bool = False) -> list[tuple[Path, float, float]]:
+    """(path, percent, faithful cap in seconds) of the benchmark: every fixture and example at 60 %, small ones
+    also at 100 %."""
+    out: list[tuple[Path, float, float]] = []
+    fixtures = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
+    examples = sorted(EXAMPLES.glob("*.svg"))
+    for path in fixtures + examples:
+        big = path.name in BIG
+        if quick and (big or path in examples):
+            continue
+        out.append((path, 0.6, 8.0 if big else 25.0))
+    for name in ("simpleVertex.svg", "curvedPleatSimple.svg", "miura-ori.svg"):
+        if (FIXTURES / name).exists():
+            out.append((FIXTURES / name, 1.0, 25.0))
+    return out
+
+
+def run_all(quick: bool = False, echo: bool = True) -> list[dict[str, Any]]:
+    """Run :func:`run_case` over :func:`cases`; rows print as they finish when ``echo``."""
+    rows = []
+    for path, percent, cap in cases(quick):
+        try:
+            row = run_case(path, percent, faithful_seconds=cap)
+        except Exception as exc:  # a failing case is reported, not hidden
+            row = {"case": path.name, "percent": percent, "error": f"{type(exc).__name__}: {exc}"}
+        rows.append(row)
+        if echo:
+            print(format_table([row], header=not rows[:-1]), flush=True)
+    return rows
+
+
+def _fmt(v: Any, spec: str) -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    return format(v, spec)
+
+
+def format_table(rows: list[dict[str, Any]], header: bool = True) -> str:
+    """Markdown table of benchmark rows."""
+    cols = [
+        ("case", "case", "s"),
+        ("%", "percent", ".0%"),
+        ("faces", "faces", "d"),
+        ("fast it", "fast_iterations", "d"),
+        ("fast evals", "fast_force_evaluations", "d"),
+        ("fast asm", "fast_assemblies", "d"),
+        ("fast ms", "fast_ms", ".0f"),
+        ("fast res", "fast_residual", ".1e"),
+        ("faithful steps", "faithful_steps", "d"),
+        ("faithful ms", "faithful_ms", ".0f"),
+        ("faithful res", "faithful_residual", ".1e"),
+        ("faithful conv", "faithful_converged", ""),
+        ("RMS/diag", "rms_over_diagonal", ".1e"),
+        ("E fast", "fast_energy", ".4g"),
+        ("E faithful", "faithful_energy", ".4g"),
+        ("wall ×", "wall_ratio", ".0f"),
+        ("evals ×", "evaluation_ratio", ".0f"),
+        ("strain %", "fast_strain_pct", ".3f"),
+        ("iso it", "isometric_iterations", "d"),
+        ("iso strain %", "isometric_strain_pct", ".4f"),
+    ]
+    lines = []
+    if header:
+        lines.append("| " + " | ".join(c[0] for c in cols) + " |")
+        lines.append("|" + "---|" * len(cols))
+    for r in rows:
+        if "error" in r:
+            lines.append(f"| {r['case']} | {r['percent']:.0%} | error: {r['error']} |")
+            continue
+        lines.append("| " + " | ".join(_fmt(r.get(key), spec) for _, key, spec in cols) + " |")
+    return "\n".join(lines)
+
+
+def summary_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """Min/median/max of the wall and evaluation ratios, agreement and isometric strain over the rows."""
+    ok = [r for r in rows if "error" not in r and "wall_ratio" in r]
+    out = []
+    if ok:
+        w = np.array([r["wall_ratio"] for r in ok])
+        e = np.array([r["evaluation_ratio"] for r in ok])
+        out.append(f"- wall ratio faithful/fast: min {w.min():.1f}×, median {np.median(w):.1f}×, max {w.max():.0f}×")
+        out.append(f"- force-evaluation ratio: min {e.min():.0f}×, median {np.median(e):.0f}×, max {e.max():.0f}×")
+        conv = [r for r in ok if r["faithful_converged"]]
+        agree = [r for r in ok if r["rms_over_diagonal"] <= 1e-3]
+        out.append(
+            f"- faithful converged (residual ≤ tolerance) in {len(conv)}/{len(ok)} runs; RMS/diag ≤ 1e-3 in "
+            f"{len(agree)}/{len(ok)} runs"
+        )
+        big = [r for r in ok if r["faithful_steps"] > 10_000]
+        if big:
+            out.append(
+                f"- where the faithful model needed > 10,000 steps ({len(big)} runs): evaluation ratio min "
+                f"{min(r['evaluation_ratio'] for r in big):.0f}×"
+            )
+    iso = [r for r in rows if "isometric_strain_pct" in r]
+    if iso:
+        s = np.array([r["isometric_strain_pct"] for r in iso])
+        out.append(f"- isometric mean strain: max {s.max():.4f} % over {len(iso)} runs (target ≤ 0.05 %)")
+    return out
+
+
+def machine_line() -> str:
+    """Machine and library versions for the report header."""
+    try:
+        cpu = next(
+            (ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "unknown"
+        )
+    except OSError:
+        cpu = platform.processor() or "unknown"
+    return (
+        f"{cpu}, {os.cpu_count()} cores (shared with other jobs while measured), {platform.system()} "
+        f"{platform.release()}; Python {platform.python_version()}, numpy {np.__version__}"
+    )
+
+
+def write_docs(rows: list[dict[str, Any]], path: Path = DOC) -> None:
+    """Replace the generated section of ``docs/solver.md`` with the table (appended if the markers are absent)."""
+    body = "\n".join(
+        [
+            BEGIN,
+            f"Generated by `benchmarks/solvers.py` on {time.strftime('%Y-%m-%d %H:%M')}. Machine: {machine_line()}.",
+            "Ruling mesh; the faithful run is capped (seconds, see `cases()`); `RMS/diag` compares the fast and "
+            "faithful shapes after rigid alignment; `evals` counts every model evaluation (line search included); "
+            "`asm` Hessian assemblies+factorisations. Timings are wall-clock on a loaded machine.",
+            "",
+            format_table(rows),
+            "",
+            *summary_lines(rows),
+            END,
+        ]
+    )
+    text = path.read_text() if path.exists() else ""
+    if BEGIN in text and END in text:
+        text = text[: text.index(BEGIN)] + body + text[text.index(END) + len(END) :]
+    else:
+        text = text.rstrip() + "\n\n" + body + "\n"
+    from curved_fold.core.files import atomic_write_text
+
+    atomic_write_text(path, text)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small fixtures only")
+    parser.add_argument("--no-write", action="store_true", help="do not update docs/solver.md")
+    args = parser.parse_args(argv)
+    print(machine_line())
+    rows = run_all(args.quick)
+    print("\n".join(summary_lines(rows)))
+    if not args.no_write:
+        write_docs(rows)
+        print(f"wrote {DOC}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -65,6 +65,13 @@ its centre) and would otherwise leave a cluster of sliver segments there.
 MAX_SEGMENTS = 200_000
 """Guard against explosion: discretisation parameters that would produce more segments than this are enlarged."""
 
+MIN_SHEET_MM = 1e-3
+"""Smallest sheet extent accepted (1 µm): below it the merge tolerance and the solver's scale lose all meaning."""
+
+MAX_COORDINATE_MM = 1e8
+"""Largest |coordinate| accepted (100 km): beyond it squared lengths and cross products overflow or lose precision;
+such values come from a wrong unit or viewBox, never from a real sheet."""
+
 PRIORITY = {"B": 0, "C": 1, "M": 2, "V": 2, "U": 3, "F": 4}
 """Which assignment wins when two drawn segments coincide: the sheet outline first (a crease on the border cannot
 fold: it has one face), then cuts, creases with a target, undriven hinges, and facet lines last."""
@@ -482,7 +489,21 @@ def discretize(
         for seg in c.segments:
             if not np.all(np.isfinite(seg.points)):
                 raise PatternError(f"{c.source or 'curve'}: non-finite coordinate in a {seg.kind} segment")
-    d_int, d_tol, d_merge = default_parameters(sheet_size(curves) or 1.0)
+    for c in curves:
+        for seg in c.segments:
+            big = float(np.max(np.abs(seg.points)))
+            if big > MAX_COORDINATE_MM:
+                raise PatternError(
+                    f"{c.source or 'curve'}: coordinate {big:.3g} mm in a {seg.kind} segment is beyond "
+                    f"±{MAX_COORDINATE_MM:g} mm (100 km); check the file's units, width/height and viewBox"
+                )
+    size = sheet_size(curves)
+    if 0.0 < size < MIN_SHEET_MM:
+        raise PatternError(
+            f"crease pattern: the sheet is only {size:.3g} mm across (minimum {MIN_SHEET_MM:g} mm); check the "
+            "file's units, width/height and viewBox"
+        )
+    d_int, d_tol, d_merge = default_parameters(size or 1.0)
     interval = d_int if interval is None else float(interval)
     tolerance = d_tol if tolerance is None else float(tolerance)
     merge_tolerance = d_merge if merge_tolerance is None else float(merge_tolerance)
@@ -611,6 +632,17 @@ def discretize(
     is_b = assign[attrs] == "B"
     if is_b.any():
         deg = np.bincount(edges[is_b].ravel(), minlength=len(verts))
+        crossing = np.flatnonzero((deg >= 4) & (deg % 2 == 0))
+        if len(crossing):
+            # four or more border pieces at one point: the outline crosses or touches itself, so which side is
+            # paper is ambiguous (a figure-eight outline); the designer must redraw it
+            at_b = is_b & np.isin(edges, crossing).any(axis=1)
+            pts = ", ".join(f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in crossing[:4])
+            names = _describe_sources(sources, edge_poly[attrs[at_b]])
+            raise PatternError(
+                f"the border crosses or touches itself at {pts} mm ({names})"
+                "; draw the outline of the sheet as one loop that does not cross itself"
+            )
         open_v = np.flatnonzero(deg % 2 == 1)
         if len(open_v):
             pts = ", ".join(f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in open_v[:4])

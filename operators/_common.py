@@ -35,8 +35,18 @@ class FoldOutcome:
 
 
 def engine_errors() -> tuple[type[BaseException], ...]:
-    """Exception types the engine raises for bad input or a failed solve (turned into operator reports)."""
-    errors: list[type[BaseException]] = [PatternError, ValueError, FloatingPointError, np.linalg.LinAlgError]
+    """Exception types the engine raises for bad input or a failed solve (turned into operator reports).
+
+    ``RuntimeError`` (e.g. the ruling swaps' BMesh consistency checks) and ``ArithmeticError`` (overflow) are
+    included so an internal engine failure is reported as "Fold failed: ..." with the scene untouched, instead of
+    escaping the operator as a traceback."""
+    errors: list[type[BaseException]] = [
+        PatternError,
+        ValueError,
+        ArithmeticError,
+        RuntimeError,
+        np.linalg.LinAlgError,
+    ]
     try:
         from ..core.solver import SolverError
 

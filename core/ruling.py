@@ -21,9 +21,11 @@ them are re-scored (the valence, the quads and the existing edges change only th
 Speed: the swaps are *decided* on a plain half-edge structure (a dict from directed edge to triangle, Python lists),
 with every edge's cost, quad, convexity and valence test evaluated for the whole mesh at once in numpy at the start
 and the heap built with ``heapify``; only the few edges around each accepted swap are re-evaluated one by one. The
-accepted swaps are then *applied* to a ``bmesh`` with ``bmesh.ops.rotate_edges`` (one call per swap, through a
-direct map from vertex pair to BMEdge), and each rotation is checked to connect the expected corners; the final
-triangles are read back from the BMesh and checked against the half-edge structure.
+accepted swaps are then *applied* to a ``bmesh`` built once, with ``bmesh.ops.rotate_edges``: one call per level
+of swaps whose quads share no triangle (disjoint rotations commute; the levels keep the order of dependent swaps),
+edges found through ``bm.edges.get`` on the vertex pair. Each rotation is checked to give the expected edge and
+the final BMesh triangles are checked to equal the decided ones. The returned triangles keep their input rows
+(the two triangles of a flipped quad stay in the quad's two rows), independent of bmesh's element order.
 
 The endpoint angles depend only on which *wedge* between consecutive pattern segments at P the edge lies in, which
 no swap changes (pattern segments are never swapped). So the walk around P inside the face is replaced by a lookup

@@ -20,6 +20,11 @@ Pipeline (:func:`constrained_triangulation`):
 
 Cuts are split afterwards (:func:`split_cuts`, Origami Simulator's ``splitCuts``): each cut becomes two border edges
 and each vertex is duplicated once per extra fan of triangles separated by cuts.
+
+Speed: everything after the backend works on half-edge arrays (:func:`half_edges`, h = 3·triangle + k, twins found
+by sorting): the Delaunay screening, the constraint check, region labelling (:func:`_components`), the toggles and
+the face loops (:func:`face_loops`) are vectorised; Python loops remain only for the (few) Lawson flips, the
+region breadth-first search and the chaining of boundary half-edges into loops.
 """
 
 from __future__ import annotations
@@ -286,34 +291,6 @@ def _find(parent: list[int], i: int) -> int:
     return i
 
 
-def _boundary_loops(tris: np.ndarray, members: np.ndarray, is_boundary_he) -> list[list[int]]:
-    """Chain the boundary half-edges of a set of triangles into closed loops (walking each vertex's fan)."""
-    he_next: dict[tuple[int, int], tuple[int, int]] = {}
-    owner = {}
-    for ti in members:
-        a, b, c = (int(v) for v in tris[ti])
-        owner[(a, b)] = (b, c)
-        owner[(b, c)] = (c, a)
-        owner[(c, a)] = (a, b)
-    boundary = [h for h in owner if is_boundary_he(h, owner)]
-    for h in boundary:
-        g = owner[h]  # next half-edge in the same triangle, leaving h's destination
-        while not is_boundary_he(g, owner):
-            g = owner[(g[1], g[0])]  # cross to the neighbour triangle, take its half-edge leaving the same vertex
-        he_next[h] = g
-    loops, seen = [], set()
-    for h in boundary:
-        if h in seen:
-            continue
-        loop, g = [], h
-        while g not in seen:
-            seen.add(g)
-            loop.append(g[0])
-            g = he_next[g]
-        loops.append(loop)
-    return loops
-
-
 def _loop_area(points: np.ndarray, loop: list[int]) -> float:
     p = points[loop]
     q = np.roll(p, -1, axis=0)
@@ -345,7 +322,7 @@ def face_loops(
     """Boundary loops of every crease-pattern face (the triangles of each face bounded by segments or the hull).
 
     The loops of a face are listed in the order of their first half-edge (triangle order, then corner order), each
-    starting there: the order the per-face walk :func:`_boundary_loops` gives. The "next boundary half-edge" is found
+    starting there (the order of a per-face walk over the triangles). The "next boundary half-edge" is found
     for all half-edges at once by turning around each vertex's fan (vectorised); only the final chaining into loops
     is a Python pass over the boundary half-edges.
     """

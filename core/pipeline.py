@@ -111,7 +111,8 @@ def fold_pattern(
         "message": result.message,
         "warnings": list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings),
     }
-    report.update(measure(mesh, result, percent))
+    # metrics.summary also reports mesh counts (as floats): keep the pipeline's own integer counts
+    report.update({k: v for k, v in measure(mesh, result, percent).items() if k not in report})
     bad = report.get("fold_angle_error_mean_deg", 0.0) > DOES_NOT_FOLD_DEG
     report["does_not_fold_as_assigned"] = bool(bad)
     if bad:

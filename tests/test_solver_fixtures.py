@@ -1,0 +1,101 @@
+"""The solvers on real inputs through ``core.pipeline``: fixtures, the analytic sector, divergence, time steps."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.solver import Solver, SolverError, SolverSettings, rigid_rms
+from curved_fold.core.solver_faithful import time_step
+from tests.analytic import annular_sector
+from tests.test_forces import grid_mesh
+
+FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
+needs_fixtures = pytest.mark.skipif(not FIXTURES.is_dir(), reason=f"fixture folder {FIXTURES} is absent")
+
+
+def fixture_mesh(name: str):
+    from curved_fold.core.meshing import build_mesh
+    from curved_fold.core.reader import read_pattern
+
+    return build_mesh(read_pattern(FIXTURES / name), mesh_type="ruling")
+
+
+def test_forced_huge_time_step_raises_solver_error_naming_the_step():
+    mesh = grid_mesh(4, 4, 80.0, {(2, 7): ("V", 90.0), (7, 12): ("V", 90.0)})
+    solver = Solver(mesh, SolverSettings(dt_safety=6.0, max_steps=5000), "faithful")
+    with pytest.raises(SolverError, match=r"diverged at step \d+ \(dt"):
+        solver.solve(1.0)
+
+
+@needs_fixtures
+def test_origami_simulator_time_step_explodes_on_curved_pleat_but_ours_does_not():
+    """curvedPleatSimple's short bars and skinny hinges: Origami Simulator's dt is above the stability limit."""
+    mesh = fixture_mesh("curvedPleatSimple.svg")
+    peer = Solver(mesh, SolverSettings(dt_rule="origami_simulator", max_steps=3000), "faithful")
+    ours = Solver(mesh, SolverSettings(max_steps=3000), "faithful")
+    assert ours.dt < peer.dt
+    with pytest.raises(SolverError, match="diverged"):
+        peer.solve(0.6)
+    r = ours.solve(0.6)
+    assert np.all(np.isfinite(r.positions)) and r.residual < 10
+
+
+def test_all_terms_time_step_is_within_the_stability_limit_and_not_overcautious():
+    """dt is 0.9 × the exact semi-implicit Euler limit: 0.95 × of it stays bounded, 1.3 × of it diverges."""
+    mesh = grid_mesh(4, 4, 80.0, {(2, 7): ("V", 90.0), (7, 12): ("V", 90.0)})
+    base = Solver(mesh, SolverSettings(), "faithful")
+    assert base.dt > time_step(base.model, "gershgorin")  # larger than the provable (conservative) bound
+    stable = Solver(mesh, SolverSettings(dt_safety=0.95, max_steps=4000), "faithful").solve(1.0)
+    assert np.all(np.isfinite(stable.positions))
+    with pytest.raises(SolverError):
+        Solver(mesh, SolverSettings(dt_safety=1.3, max_steps=20000), "faithful").solve(1.0)
+
+
+@pytest.mark.slow
+def test_fast_and_faithful_reach_the_same_equilibrium_on_the_analytic_sector():
+    """Pipeline on the §3.3 sector (curve input → discretise → ruling mesh) at 50 %: the faithful dynamics settles
+    to the fast solver's equilibrium (RMS after rigid alignment ≤ 0.1 % of the diagonal) with ≥ 100× more
+    force evaluations."""
+    from curved_fold.core.pipeline import fold_pattern
+
+    pattern = annular_sector().pattern(interval=20.0)
+    fast = fold_pattern(pattern, percent=0.5, solver="fast")
+    slow = fold_pattern(pattern, percent=0.5, solver="faithful", settings=SolverSettings(tolerance=1e-4))
+    assert fast.result.converged and slow.result.converged, (fast.result.message, slow.result.message)
+    assert rigid_rms(fast.result.positions, slow.result.positions) / fast.mesh.diagonal <= 1e-3
+    assert fast.result.energy <= slow.result.energy * (1 + 1e-3)
+    assert slow.result.force_evaluations >= 100 * fast.result.force_evaluations
+
+
+@needs_fixtures
+@pytest.mark.parametrize("name", ["simpleVertex.svg", "curvedPleatSimple.svg"])
+def test_pipeline_on_fixture_reports_metrics_and_converges(name):
+    from curved_fold.core.pipeline import fold_pattern
+    from curved_fold.core.reader import read_pattern
+
+    run = fold_pattern(read_pattern(FIXTURES / name), percent=0.6)
+    r = run.report
+    assert r["converged"], r["message"]
+    assert isinstance(r["faces"], int) and r["faces"] == run.mesh.n_faces
+    for key in ("warp_mean_deg", "strain_mean_pct", "strain_max_pct", "fold_angle_error_mean_deg", "residual"):
+        assert np.isfinite(r[key]), key
+    assert 0 <= r["strain_mean_pct"] < 5.0
+    assert not r["does_not_fold_as_assigned"]
+    crease = run.mesh.is_crease()
+    assert np.nanmax(np.abs(run.result.fold_angles[crease])) > 60  # 60 % of 180° creases: clearly folded
+
+
+@needs_fixtures
+def test_isometric_setting_keeps_strain_below_five_hundredths_of_a_percent():
+    from curved_fold.core.metrics import summary
+
+    mesh = fixture_mesh("simpleVertex.svg")
+    normal = Solver(mesh, SolverSettings(), "fast").solve(0.6)
+    iso = Solver(mesh, SolverSettings(max_iterations=300), "isometric").solve(0.6)
+    assert iso.converged, iso.message
+    s_iso = summary(mesh, iso.positions)["strain_mean_pct"]
+    s_normal = summary(mesh, normal.positions)["strain_mean_pct"]
+    assert s_iso <= 0.05 and s_iso < 0.1 * s_normal, (s_iso, s_normal)

@@ -1,0 +1,400 @@
+"""The catalogue of bad inputs (docs/errors.md): each one gets a message that names the problem and where it is.
+
+Every test here is one row of the table in ``docs/errors.md``. Inputs are built in the test (small SVG texts, FOLD
+JSON, crease curves), run through the real reader → discretisation → mesh → solver chain, and the message is checked
+for both the problem and its location (SVG element and line, FOLD array index, point in mm). Errors are
+:class:`PatternError`; recoverable problems are warnings carried in the pattern / fold report, and the fold still
+ends finite. Operator-level rows (nothing selected, scene left unchanged) are in ``tests/test_nothing_lost.py``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.discretize import MAX_SEGMENTS, discretize
+from curved_fold.core.pattern import CreaseCurve, CreasePattern, CurveSegment, PatternError
+from curved_fold.core.pipeline import fold_pattern
+from curved_fold.core.reader import read_pattern
+from curved_fold.core.svg import parse_svg_text
+
+REPO = Path(__file__).resolve().parents[1]
+BORDER = '<path id="border" d="M0 0 L100 0 L100 100 L0 100 Z" stroke="#000000" fill="none"/>'
+
+
+def svg(body: str, size: str = 'width="100mm" height="100mm" viewBox="0 0 100 100"') -> str:
+    """An SVG document around ``body``; the first element after the root is on line 3."""
+    return f'<?xml version="1.0" encoding="utf-8"?>\n<svg xmlns="http://www.w3.org/2000/svg" {size}>\n{body}\n</svg>\n'
+
+
+def pattern_of(body: str, **params) -> CreasePattern:
+    drawing = parse_svg_text(svg(body), "t.svg")
+    pattern = discretize(drawing.curves, **params)
+    pattern.warnings = list(drawing.warnings) + pattern.warnings
+    return pattern
+
+
+def assert_folds_finite(pattern: CreasePattern, **kw) -> dict:
+    """Fold and check the result is a usable shape: finite, bounded extent, bounded iterations."""
+    run = fold_pattern(pattern, **kw)
+    pos = run.result.positions
+    assert np.all(np.isfinite(pos))
+    assert np.ptp(pos, axis=0).max() <= 1.01 * run.mesh.diagonal  # a folded sheet never grows beyond its diagonal
+    assert run.report["iterations"] <= 200
+    return run.report
+
+
+def line(a, b) -> CurveSegment:
+    return CurveSegment("line", np.array([a, b], dtype=float))
+
+
+def square(w: float = 100.0) -> CreaseCurve:
+    c = [(0, 0), (w, 0), (w, w), (0, w)]
+    return CreaseCurve([line(c[i], c[(i + 1) % 4]) for i in range(4)], "B", None, closed=True, source="square")
+
+
+def write(tmp_path: Path, name: str, data: str | bytes) -> Path:
+    p = tmp_path / name
+    p.write_bytes(data.encode() if isinstance(data, str) else data)
+    return p
+
+
+# ----------------------------------------------------------------------------------------------- border
+
+
+def test_no_border_creases_only() -> None:
+    p = pattern_of('<path id="c" d="M0 50 L100 50" stroke="#f00"/><path id="c2" d="M50 0 L50 100" stroke="#00f"/>')
+    with pytest.raises(PatternError, match="no paper left: the border does not enclose any region"):
+        fold_pattern(p, angle=90)
+
+
+def test_no_border_single_line() -> None:
+    p = pattern_of('<path id="c" d="M50 0 L50 100" stroke="#f00"/>')
+    with pytest.raises(PatternError, match="all pattern vertices lie on one line; there is no sheet"):
+        fold_pattern(p, angle=90)
+
+
+def test_open_border_warns_with_loose_ends_and_still_folds() -> None:
+    p = pattern_of(
+        '<path id="border" d="M0 0 L100 0 L100 100 L0 100" stroke="#000" fill="none"/>'
+        '<path id="c" d="M50 0 L50 100" stroke="#f00"/>'
+    )
+    warning = next(w for w in p.warnings if "border is not closed" in w)
+    assert "2 loose end(s) at (0.000, 0.000), (0.000, -100.000) mm" in warning  # SVG y-down flipped: y = -100
+    assert_folds_finite(p, angle=90)
+
+
+def test_self_crossing_border_is_an_error() -> None:
+    with pytest.raises(PatternError, match=r"border crosses or touches itself at \(50\.000, -50\.000\) mm") as exc:
+        pattern_of('<path id="border" d="M0 0 L100 100 L100 0 L0 100 Z" stroke="#000" fill="none"/>')
+    assert "SVG <path id='border'> (line 3)" in str(exc.value)
+
+
+def test_crease_outside_the_border_is_removed_with_a_warning() -> None:
+    p = pattern_of(BORDER + '\n<path id="outside" d="M150 0 L150 100" stroke="#f00"/>')
+    assert any(
+        "removed 1 crease segment(s) outside the border, from SVG <path id='outside'> (line 4)" in w for w in p.warnings
+    )
+    assert p.count("M") == 0
+    assert_folds_finite(p, angle=90)
+
+
+def test_crease_crossing_the_border_is_trimmed_with_a_warning() -> None:
+    p = pattern_of(BORDER + '\n<path id="long" d="M-20 50 L120 50" stroke="#f00"/>')
+    assert any("removed 2 crease segment(s) outside the border, from SVG <path id='long'>" in w for w in p.warnings)
+    m = p.vertices[p.edges[p.assignments == "M"]]
+    assert m[..., 0].min() == pytest.approx(0.0) and m[..., 0].max() == pytest.approx(100.0)
+    report = assert_folds_finite(p, angle=90)
+    assert report["fold_angle_error_mean_deg"] < 1.0
+
+
+# ----------------------------------------------------------------------------------------------- curves
+
+
+def test_duplicate_curves_with_different_roles_warn_and_keep_one() -> None:
+    p = pattern_of(
+        BORDER + '<path id="c1" d="M50 0 L50 100" stroke="#f00"/><path id="c2" d="M50 0 L50 100" stroke="#00f"/>'
+    )
+    assert any(
+        "duplicate segment(s) with different assignments" in w
+        and "kept SVG <path id='c1'> (line 3) (M) over SVG <path id='c2'> (line 3) (V)" in w
+        for w in p.warnings
+    )
+    assert p.count("M") == 1 and p.count("V") == 0
+    assert_folds_finite(p, angle=90)
+
+
+def test_overlapping_collinear_curves_are_merged_into_one_crease() -> None:
+    p = pattern_of(
+        BORDER + '<path id="a" d="M50 0 L50 70" stroke="#f00"/><path id="b" d="M50 30 L50 100" stroke="#f00"/>'
+    )
+    m = np.sort(p.vertices[p.edges[p.assignments == "M"]][..., 1], axis=1)
+    assert sorted(map(tuple, m.round(6).tolist())) == [(-100.0, -70.0), (-70.0, -30.0), (-30.0, 0.0)]
+    assert_folds_finite(p, angle=90)
+
+
+def test_zero_length_segment_and_degenerate_bezier_are_dropped() -> None:
+    p = pattern_of(
+        BORDER
+        + '<path id="dot" d="M50 50 L50 50" stroke="#f00"/>'
+        + '<path id="point" d="M20 20 C20 20 20 20 20 20" stroke="#00f"/>'
+        + '<path id="c" d="M70 0 L70 100" stroke="#00f"/>'
+    )
+    assert p.count("M") == 0 and p.count("V") == 1  # only the real crease is left
+    assert_folds_finite(p, angle=90)
+
+
+def test_only_degenerate_curves_is_an_error_naming_them() -> None:
+    dot = CreaseCurve([line((5, 5), (5, 5))], "M", -90.0, source="SVG <path id='dot'> (line 7)")
+    with pytest.raises(PatternError, match=r"every segment is shorter than the merge tolerance .*id='dot'"):
+        discretize([dot])
+
+
+def test_looping_bezier_with_coincident_ends_folds() -> None:
+    """A cubic whose two end points coincide (a closed teardrop) is a valid curve, not a zero-length one."""
+    p = pattern_of(BORDER + '<path id="loop" d="M50 20 C90 90 10 90 50 20" stroke="#00f"/>')
+    assert p.count("V") > 10 and p.edge_from_curve.any()
+    assert_folds_finite(p)
+
+
+# ----------------------------------------------------------------------------------------------- numbers
+
+
+def test_nan_in_svg_path_names_element_line_and_character() -> None:
+    with pytest.raises(PatternError, match=r"SVG <path id='c1'> \(line 3\): bad path data: expected a number at 'NaN'"):
+        pattern_of(BORDER + '<path id="c1" d="M50 NaN L50 100" stroke="#f00"/>')
+
+
+def test_infinite_number_in_svg_path() -> None:
+    with pytest.raises(PatternError, match=r"SVG <path id='c1'> \(line 3\): bad path data: number out of range"):
+        pattern_of(BORDER + '<path id="c1" d="M50 1e400 L50 100" stroke="#f00"/>')
+
+
+def test_nan_in_a_curve_object_names_the_curve() -> None:
+    bad = CreaseCurve([line((0, 0), (math.inf, 1))], "V", 90.0, source="curve 'Crease.001' spline 0")
+    with pytest.raises(PatternError, match=r"curve 'Crease\.001' spline 0: non-finite coordinate in a line segment"):
+        discretize([square(), bad])
+
+
+def test_absurd_coordinates_are_rejected_not_overflowed() -> None:
+    with pytest.raises(PatternError, match=r"SVG <path id='border'> \(line 3\): coordinate 1e\+300 mm .* beyond"):
+        pattern_of('<path id="border" d="M0 0 L1e300 0 L1e300 1e300 L0 1e300 Z" stroke="#000"/>')
+
+
+def test_absurd_scale_from_width_and_viewbox() -> None:
+    """A wrong unit (a 1-unit viewBox stretched to 1e9 mm) is caught at the coordinates, with a hint at units."""
+    text = svg(
+        '<path id="border" d="M0 0 L1 0 L1 1 L0 1 Z" stroke="#000"/>',
+        size='width="1e9mm" height="1e9mm" viewBox="0 0 1 1"',
+    )
+    with pytest.raises(PatternError, match=r"units, width/height and viewBox"):
+        discretize(parse_svg_text(text, "t.svg").curves)
+
+
+def test_microscopic_sheet_is_rejected() -> None:
+    with pytest.raises(PatternError, match=r"the sheet is only 1e-09 mm across \(minimum 0\.001 mm\)"):
+        pattern_of(
+            '<path id="border" d="M0 0 L1e-9 0 L1e-9 1e-9 L0 1e-9 Z" stroke="#000"/>'
+            '<path id="c" d="M5e-10 0 L5e-10 1e-9" stroke="#f00"/>'
+        )
+
+
+def test_large_but_sane_scale_folds() -> None:
+    """A 10 km sheet is odd but legal: the defaults are scale-aware, so it meshes and folds like a 100 mm one."""
+    p = pattern_of(
+        '<path id="border" d="M0 0 L1e7 0 L1e7 1e7 L0 1e7 Z" stroke="#000"/>'
+        '<path id="c" d="M5e6 0 L5e6 1e7" stroke="#f00"/>'
+    )
+    report = assert_folds_finite(p, angle=90)
+    assert report["fold_angle_error_mean_deg"] < 1.0
+
+
+def test_non_finite_fold_angle_option() -> None:
+    p = pattern_of(BORDER + '<path id="c" d="M50 0 L50 100" stroke="#f00" opacity="0"/>')
+    with pytest.raises(PatternError, match="--angle must be a finite number of degrees, got nan"):
+        fold_pattern(p, angle=float("nan"))
+
+
+def test_bad_discretisation_parameters() -> None:
+    with pytest.raises(PatternError, match=r"discretisation: tolerance must be a positive number of mm, got 0\.0"):
+        discretize([square()], tolerance=0.0)
+    with pytest.raises(PatternError, match=r"discretisation: interval must be a positive number of mm, got nan"):
+        discretize([square()], interval=float("nan"))
+    with pytest.raises(PatternError, match=r"merge tolerance must be ≥ 0 mm, got -1\.0"):
+        discretize([square()], merge_tolerance=-1.0)
+
+
+def test_tolerance_so_small_the_mesh_would_explode_is_capped_and_said() -> None:
+    curve = CreaseCurve(
+        [CurveSegment("cubic", np.array([[0, 50], [30, 0], [70, 100], [100, 50]], float))], "V", 90.0, source="wave"
+    )
+    t0 = time.perf_counter()
+    p = discretize([square(), curve], tolerance=1e-9, interval=1e-4)
+    assert time.perf_counter() - t0 < 20
+    assert p.n_edges <= 1.2 * MAX_SEGMENTS
+    capped = next(w for w in p.warnings if "discretisation capped" in w)
+    assert "interval 0.0001 mm and tolerance 1e-09 mm" in capped and f"limit {MAX_SEGMENTS}" in capped
+
+
+# ----------------------------------------------------------------------------------------------- files
+
+
+@pytest.mark.parametrize(
+    ("name", "data", "message"),
+    [
+        ("malformed.svg", "<svg><path></svg>", r"malformed\.svg: malformed XML at line 1, column 14: mismatched tag"),
+        ("empty.svg", "", r"empty\.svg: malformed XML at line 1, column 1: no element found"),
+        ("binary.svg", b"\x89PNG\r\n\x1a\n\x00\x00", r"binary\.svg: malformed XML at line 1"),
+        ("page.svg", "<?xml version='1.0'?>\n<html>\n</html>", r"page\.svg: not an SVG file \(root element is <html>"),
+        ("blank.svg", svg(""), r"blank\.svg: no usable crease element"),
+        ("pattern.txt", "hello", r"pattern\.txt: unknown file type '\.txt'; expected one of \.svg, \.fold, \.blend"),
+        ("noext", "hello", r"noext: unknown file type '\(no suffix\)'"),
+    ],
+)
+def test_malformed_empty_or_foreign_files(tmp_path: Path, name: str, data, message: str) -> None:
+    with pytest.raises(PatternError, match=message):
+        read_pattern(write(tmp_path, name, data))
+
+
+def test_malformed_svg_reports_the_line_of_the_error(tmp_path: Path) -> None:
+    text = svg(BORDER + '\n<path id="c" d="M50 0 L50 100" stroke="#f00">\n<g>\n</path>')
+    with pytest.raises(PatternError, match=r"bad\.svg: malformed XML at line 6, column \d+: mismatched tag"):
+        read_pattern(write(tmp_path, "bad.svg", text))
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(PatternError, match="no such file"):
+        read_pattern(tmp_path / "absent.svg")
+
+
+def test_bad_svg_attribute_names_element_and_line() -> None:
+    with pytest.raises(PatternError, match=r"SVG <line id='l'> \(line 4\): attribute x1='abc' is not a number"):
+        pattern_of(BORDER + '\n<line id="l" x1="abc" y1="0" x2="50" y2="100" stroke="#f00"/>')
+
+
+def test_unknown_svg_colours_are_listed_with_lines() -> None:
+    p = pattern_of(
+        BORDER
+        + '\n<path id="c" d="M50 0 L50 100" stroke="#123456"/>'
+        + '\n<path id="d" d="M60 0 L60 100" stroke="#123456"/>'
+        + '\n<path id="e" d="M20 0 L20 100" stroke="orange"/>'
+        + '\n<path id="v" d="M80 0 L80 100" stroke="#00f"/>'
+    )
+    warning = next(w for w in p.warnings if "unknown stroke colours" in w)
+    assert "#123456 (2 elements: lines 4, 5)" in warning and "orange (1 element: line 6)" in warning
+    assert p.count("V") == 1 and p.count("M") == 0
+    assert_folds_finite(p, angle=90)
+
+
+def test_only_unknown_colours_is_an_error() -> None:
+    with pytest.raises(PatternError, match="no usable crease element .* black border, red mountain, blue valley"):
+        pattern_of('<path id="c" d="M50 0 L50 100" stroke="#123456"/>')
+
+
+SQUARE_FOLD = {
+    "vertices_coords": [[0, 0], [1, 0], [1, 1], [0, 1]],
+    "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]],
+    "edges_assignment": ["B", "B", "B", "B", "V"],
+}
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"edges_assignment": ["B", "B", "B", "B"]}, r"edges_assignment has 4 entries but edges_vertices has 5"),
+        (
+            {"edges_assignment": ["B", "B", "B", "B", "Q"]},
+            r"edges_assignment\[4\] = 'Q' is not one of B, M, V, F, U, C",
+        ),
+        ({"edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 0], [0, 7]]}, r"edges_vertices\[4\] = \[0, 7\]: index 7 out"),
+        ({"edges_foldAngle": [0, 0]}, r"edges_foldAngle has 2 entries but edges_vertices has 5"),
+        ({"edges_foldAngle": [0, 0, 0, 0, "x"]}, r"edges_foldAngle\[4\] = 'x' is not a finite number of degrees"),
+        ({"edges_vertices": None}, r"missing required array edges_vertices"),
+        ({"vertices_coords": [[0, 0], [1, 0, 0], [1, 1], [0, 1]]}, r"vertices_coords\[1\] = \[1, 0, 0\]"),
+    ],
+)
+def test_fold_file_inconsistent_arrays(tmp_path: Path, change: dict, message: str) -> None:
+    data = {**SQUARE_FOLD, **change}
+    data = {k: v for k, v in data.items() if v is not None}
+    with pytest.raises(PatternError, match=r"sq\.fold: " + message):
+        read_pattern(write(tmp_path, "sq.fold", json.dumps(data)))
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ('{"vertices_coords": [[0,0],', r"malformed JSON at line 1, column 28"),
+        ("", r"malformed JSON at line 1, column 1"),
+        ("[1, 2]", r"a FOLD file must be a JSON object"),
+        (
+            '{"vertices_coords":[[0,0],[1,NaN],[1,1]],"edges_vertices":[[0,1],[1,2],[2,0]],"edges_assignment":["B","B","B"]}',
+            r"vertices_coords\[1\] = \[1, nan\] has a non-finite coordinate",
+        ),
+    ],
+)
+def test_fold_file_malformed_json(tmp_path: Path, text: str, message: str) -> None:
+    with pytest.raises(PatternError, match=r"sq\.fold: " + message):
+        read_pattern(write(tmp_path, "sq.fold", text))
+
+
+def test_fold_file_not_utf8(tmp_path: Path) -> None:
+    with pytest.raises(PatternError, match=r"sq\.fold: not UTF-8 text \(byte \d+\)"):
+        read_pattern(write(tmp_path, "sq.fold", b'{"a": "\xff\xfe"}'))
+
+
+@pytest.mark.parametrize(
+    ("edges", "assign", "coords", "message"),
+    [
+        ([[0, 1], [1, 2], [2, 3], [3, 0], [1, 0]], "BBBBV", None, r"pattern edges 0 and 4 join the same two vertices"),
+        ([[0, 1], [1, 2], [2, 3], [3, 0], [2, 2]], "BBBBV", None, r"pattern edge 4 starts and ends at one vertex"),
+        (
+            [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2], [1, 3]],
+            "BBBBVM",
+            None,
+            r"segments cross or touch near \(0\.5, 0\.5\) mm",
+        ),
+        (
+            [[0, 1], [1, 2], [4, 3], [3, 0], [0, 2]],
+            "BBBBV",
+            [[0, 0], [1, 0], [1, 1], [0, 1], [1, 1]],
+            r"pattern vertex 4 at \[1\.0, 1\.0\] mm is not in the triangulation \(it duplicates another vertex\)",
+        ),
+    ],
+)
+def test_fold_file_geometry_that_cannot_be_meshed(tmp_path: Path, edges, assign, coords, message) -> None:
+    data = {
+        "vertices_coords": coords or SQUARE_FOLD["vertices_coords"],
+        "edges_vertices": edges,
+        "edges_assignment": list(assign),
+    }
+    pattern = read_pattern(write(tmp_path, "sq.fold", json.dumps(data)))
+    with pytest.raises(PatternError, match=r"triangulation: " + message):
+        fold_pattern(pattern, angle=90)
+
+
+# ----------------------------------------------------------------------------------------------- cannot fold
+
+
+def test_all_mountains_does_not_fold_as_assigned_and_stays_stable() -> None:
+    """Paper Fig. 7: concentric arcs all assigned mountain cannot fold; the run ends still and says so."""
+    path = REPO / "examples" / "cannot_fold.svg"
+    if not path.is_file():
+        pytest.skip(f"{path} is absent")
+    report = assert_folds_finite(read_pattern(path))
+    assert report["converged"] and report["residual"] <= 1e-6
+    assert report["does_not_fold_as_assigned"] is True
+    assert "does not fold as assigned" in report["does_not_fold_message"]
+    assert report["strain_max_pct"] < 50
+
+
+def test_dangling_crease_does_not_fold_as_assigned() -> None:
+    """A crease ending inside the paper cannot reach its angle (non-foldable vertex): flagged, not exploded."""
+    p = pattern_of(BORDER + '<path id="c" d="M50 20 L50 80" stroke="#f00"/>')
+    report = assert_folds_finite(p, angle=90)
+    assert report["does_not_fold_as_assigned"] is True
+    assert report["strain_max_pct"] < 5

@@ -1,0 +1,189 @@
+"""Property-based fuzzing of the whole engine: random Bézier creases in random borders, random roles and angles.
+
+Every generated pattern must end in exactly one of two ways:
+
+* **folded**: a mesh whose folded coordinates are finite, no larger than the flat sheet's diagonal, with the
+  per-node strain below :data:`STRAIN_BOUND_PCT` and a bounded iteration count; or
+* **rejected** with a catalogued :class:`PatternError` (a message from ``docs/errors.md``, see :data:`CATALOGUE`).
+
+Anything else (another exception type, an uncatalogued message, non-finite output, a run over :data:`TIME_BOUND_S`)
+fails. The CI profile (``test_fuzz_quick``) is bounded to about a minute; the long run is
+``.venv/bin/python tools/fuzz_long.py --examples 2000`` (counts in docs/errors.md).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from curved_fold.core.discretize import discretize
+from curved_fold.core.pattern import CreaseCurve, CurveSegment, PatternError
+from curved_fold.core.pipeline import fold_pattern
+from curved_fold.core.solver import SolverError, SolverSettings
+
+STRAIN_BOUND_PCT = 100.0
+"""Largest per-node strain (Origami Simulator's mean |ℓ/L0 − 1| of a node's bars, percent) a folded result may
+show. Patterns that cannot fold as assigned stretch (the paper's Fig. 7 reports this), but a sheet whose bars
+doubled in length has exploded."""
+
+TIME_BOUND_S = 60.0
+"""Wall-time bound of one pattern (discretise + mesh + fold) on the shared 2-core CI machine."""
+
+CATALOGUE: dict[str, str] = {
+    "border crosses itself": r"the border crosses or touches itself at \(",
+    "no paper": r"triangulation: no paper left: the border does not enclose any region",
+    "collinear": r"triangulation: all pattern vertices lie on one line",
+    "all segments degenerate": r"crease pattern: every segment is shorter than the merge tolerance",
+    "segments cross (triangulation)": r"triangulation: segments cross or touch near \(",
+    "edge not in triangulation": r"triangulation: pattern edge \d+ \(.*\) is not an edge of the triangulation",
+    "vertex not in triangulation": r"triangulation: pattern vertex \d+ at \[.*\] mm is not in the triangulation",
+    "degenerate triangle": r"(triangle \d+ .* is degenerate|has zero length)",
+}
+"""Catalogued rejections (docs/errors.md): a short name → the regular expression its message must match."""
+
+
+@dataclass
+class Outcome:
+    """What one fuzzed pattern did: ``kind`` is ``"folded"`` or ``"rejected"``; ``detail`` the catalogue name."""
+
+    kind: str
+    detail: str
+    faces: int = 0
+    strain_max_pct: float = 0.0
+    iterations: int = 0
+    seconds: float = 0.0
+    does_not_fold: bool = False
+
+
+def _line(a, b) -> CurveSegment:
+    return CurveSegment("line", np.array([a, b], dtype=float))
+
+
+def _cubic(points) -> CurveSegment:
+    return CurveSegment("cubic", np.asarray(points, dtype=float).reshape(4, 2))
+
+
+unit = st.floats(min_value=0.0, max_value=1.0, allow_nan=False)
+
+
+@st.composite
+def borders(draw) -> tuple[CreaseCurve, float]:
+    """A random sheet outline and its size (mm): rectangle, star-shaped polygon, or a wobbly closed Bézier loop."""
+    size = draw(st.sampled_from([1.0, 20.0, 150.0, 600.0]))
+    kind = draw(st.sampled_from(["rectangle", "polygon", "bezier"]))
+    if kind == "rectangle":
+        aspect = draw(st.floats(min_value=0.05, max_value=1.0))
+        w, h = size, size * aspect
+        c = [(0, 0), (w, 0), (w, h), (0, h)]
+        segs = [_line(c[i], c[(i + 1) % 4]) for i in range(4)]
+    else:
+        n = draw(st.integers(min_value=3, max_value=7))
+        # angles in increasing order and radii in [0.3, 1]: a star-shaped (simple) polygon around the centre
+        gaps = np.array(draw(st.lists(st.floats(0.2, 1.0), min_size=n, max_size=n)))
+        ang = 2 * np.pi * np.cumsum(gaps) / gaps.sum()
+        rad = 0.5 * size * np.array(draw(st.lists(st.floats(0.3, 1.0), min_size=n, max_size=n)))
+        pts = np.column_stack([rad * np.cos(ang), rad * np.sin(ang)]) + 0.5 * size
+        if kind == "polygon":
+            segs = [_line(pts[i], pts[(i + 1) % n]) for i in range(n)]
+        else:  # each side bulges out by a random amount: may self-intersect (a catalogued rejection)
+            bulge = draw(st.lists(st.floats(-0.4, 0.6), min_size=n, max_size=n))
+            segs = []
+            for i in range(n):
+                a, b = pts[i], pts[(i + 1) % n]
+                normal = np.array([b[1] - a[1], a[0] - b[0]])
+                p1 = a + (b - a) / 3 + bulge[i] * normal
+                p2 = a + 2 * (b - a) / 3 + bulge[i] * normal
+                segs.append(_cubic([a, p1, p2, b]))
+    return CreaseCurve(segs, "B", None, closed=True, source=f"fuzz border ({kind})"), size
+
+
+@st.composite
+def crease_patterns(draw) -> list[CreaseCurve]:
+    """A random border with 1–5 random creases: cubic or straight, ends anywhere in (or a little past) the sheet,
+    random role (mountain, valley, facet, undriven, cut) and angle (none, or any in ±180°)."""
+    border, size = draw(borders())
+    curves = [border]
+    for k in range(draw(st.integers(min_value=1, max_value=5))):
+
+        def point():
+            return [(-0.1 + 1.2 * draw(unit)) * size, (-0.1 + 1.2 * draw(unit)) * size]
+
+        if draw(st.booleans()):
+            seg = _cubic([point(), point(), point(), point()])
+        else:
+            seg = _line(point(), point())
+        role = draw(st.sampled_from(["M", "V", "M", "V", "F", "U", "C"]))
+        angle = draw(st.one_of(st.none(), st.floats(min_value=-180.0, max_value=180.0)))
+        if role == "F":
+            angle = 0.0
+        elif role in ("U", "C"):
+            angle = None
+        curves.append(CreaseCurve([seg], role, angle, source=f"fuzz crease {k}"))
+    return curves
+
+
+def classify_error(message: str) -> str | None:
+    """The catalogue name a :class:`PatternError` message belongs to, or ``None`` if it is not catalogued."""
+    for name, pattern in CATALOGUE.items():
+        if re.search(pattern, message):
+            return name
+    return None
+
+
+def fold_outcome(curves: list[CreaseCurve], *, angle: float = 90.0, time_limit: float = 30.0) -> Outcome:
+    """Discretise, mesh and fold ``curves``; check the result and return what happened (raises on a violation)."""
+    t0 = time.perf_counter()
+    try:
+        pattern = discretize(curves)
+        run = fold_pattern(pattern, angle=angle, settings=SolverSettings(time_limit=time_limit))
+    except (PatternError, SolverError) as exc:
+        name = classify_error(str(exc))
+        assert name is not None, f"uncatalogued {type(exc).__name__}: {exc}"
+        return Outcome("rejected", name, seconds=time.perf_counter() - t0)
+    seconds = time.perf_counter() - t0
+    pos = run.result.positions
+    report = run.report
+    assert np.all(np.isfinite(pos)), "non-finite folded coordinates"
+    assert np.ptp(pos, axis=0).max() <= 1.01 * run.mesh.diagonal, "the folded sheet grew beyond its flat diagonal"
+    assert math.isfinite(report["strain_max_pct"]) and report["strain_max_pct"] < STRAIN_BOUND_PCT, report
+    assert report["iterations"] <= SolverSettings().max_iterations
+    assert seconds < TIME_BOUND_S, f"one pattern took {seconds:.1f} s"
+    return Outcome(
+        "folded",
+        "does not fold as assigned" if report["does_not_fold_as_assigned"] else "folded",
+        faces=int(report["faces"]),
+        strain_max_pct=float(report["strain_max_pct"]),
+        iterations=int(report["iterations"]),
+        seconds=seconds,
+        does_not_fold=bool(report["does_not_fold_as_assigned"]),
+    )
+
+
+QUICK_COUNTS: Counter[str] = Counter()
+
+
+@settings(
+    max_examples=40,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+@given(curves=crease_patterns())
+def test_fuzz_quick(curves: list[CreaseCurve]) -> None:
+    """CI profile: 40 derandomised patterns (same ones every run), about 30 s on the CI machine."""
+    out = fold_outcome(curves)
+    QUICK_COUNTS[f"{out.kind}: {out.detail}"] += 1
+
+
+def test_classify_error_knows_the_catalogue() -> None:
+    assert classify_error("the border crosses or touches itself at (1.0, 2.0) mm (x)") == "border crosses itself"
+    assert classify_error("triangulation: no paper left: the border does not enclose any region") == "no paper"
+    assert classify_error("something new went wrong") is None

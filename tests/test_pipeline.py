@@ -59,6 +59,24 @@ def test_cli_fold_writes_fold_and_report(tmp_path):
     assert report["percent"] == 0.5 and report["converged"]
 
 
+def test_cli_fold_writes_obj_through_blender(tmp_path):
+    from curved_fold.cli import main
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    out, rep = tmp_path / "s.obj", tmp_path / "s.json"
+    assert (
+        main(["fold", str(examples / "single_curve.svg"), "--out", str(out), "--percent", "60", "--report", str(rep)])
+        == 0
+    )
+    report = json.loads(rep.read_text())
+    vertex_lines = [ln for ln in out.read_text().splitlines() if ln.startswith("v ")]
+    assert len(vertex_lines) == report["vertices"] and report["converged"]
+    assert report["warp_mean_deg"] is not None and report["warp_mean_deg"] >= 0
+    zs = np.array([[float(t) for t in ln.split()[1:]] for ln in vertex_lines])
+    extent = np.ptp(zs, axis=0)
+    assert extent.min() > 0.05 * extent.max()  # folded: no axis is flat any more (units are the exporter's)
+
+
 def test_cli_rejects_unknown_output_suffix(tmp_path, capsys):
     from curved_fold.cli import main
 

@@ -160,8 +160,12 @@ def newton_solve(
             a = 1.0
             for _ls in range(8):
                 trial = x + a * p
-                tev = evaluate(model, trial, ev.theta, percent, forces=False)
-                stats.energy_evaluations += 1
+                full = _ls == 0  # the full step is usually accepted: evaluate it completely, reused below
+                tev = evaluate(model, trial, ev.theta, percent, forces=full, jacobians=full)
+                if full:
+                    stats.force_evaluations += 1
+                else:
+                    stats.energy_evaluations += 1
                 decrease = ev.energy - tev.energy
                 if decrease >= 1e-4 * a * slope:
                     accepted = True
@@ -184,8 +188,11 @@ def newton_solve(
             stats.message = f"stalled: no descent step at Newton iteration {it} (residual {residual:.2e}, λ {lam:.1e})"
             break
         x = trial
-        ev = evaluate(model, x, tev.theta, percent, jacobians=True)
-        stats.force_evaluations += 1
+        if tev.forces is not None and tev.hinge_grad is not None:
+            ev = tev
+        else:
+            ev = evaluate(model, x, tev.theta, percent, jacobians=True)
+            stats.force_evaluations += 1
     return x, ev.theta, ev, stats, lam / force_scale
 
 

@@ -1,0 +1,278 @@
+"""Nothing a user made is lost (issue 7, part 4).
+
+* every operator that fails leaves the scene exactly as it was (datablocks, curve points, roles, mesh positions,
+  attributes, shape keys: ``snapshot`` from tests/test_operators.py), for each catalogued kind of bad input;
+* the user's crease curves are never modified by a fold, a re-fold, a bake or an export;
+* a bake that fails keeps the previous bake (shape keys and keyframes) intact;
+* files are written to a temporary name and moved into place: a failed write leaves the old file and no debris.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from curved_fold.core.files import atomic_write_bytes, atomic_write_text  # noqa: E402
+
+from .test_operators import curved_pattern, line, make_curve, mod, select_only, snapshot  # noqa: E402
+
+pytestmark = pytest.mark.usefixtures("extension")
+
+
+def curve_state(names=None) -> dict:
+    """Exact control points (unrounded), role, angle, transform and spline flags of the curves named ``names``
+    (default: every curve object). Fold objects add their own crease-display curves; they are not the user's."""
+    out = {}
+    for ob in bpy.data.objects:
+        if ob.type != "CURVE" or (names is not None and ob.name not in names):
+            continue
+        pts = [
+            (tuple(bp.co), tuple(bp.handle_left), tuple(bp.handle_right), bp.handle_left_type, bp.handle_right_type)
+            for sp in ob.data.splines
+            for bp in sp.bezier_points
+        ]
+        cyclic = [sp.use_cyclic_u for sp in ob.data.splines]
+        out[ob.name] = (pts, cyclic, ob.curved_fold.role, ob.curved_fold.fold_angle, tuple(ob.matrix_world.col[3]))
+    return out
+
+
+def square_border(name="Border", w=100.0, h=60.0):
+    c = [(0, 0), (w, 0), (w, h), (0, h)]
+    return make_curve(name, [line(c[i], c[(i + 1) % 4]) for i in range(4)], "BORDER", closed=True)
+
+
+# ------------------------------------------------------------------------------------------ nothing selected
+
+
+def test_fold_with_nothing_selected(clean_scene):
+    """Nothing selected: the Fold operator is unavailable (poll says what to select); the scene is untouched."""
+    curved_pattern()
+    bpy.context.view_layer.update()
+    for ob in bpy.context.view_layer.objects:
+        ob.select_set(False)
+    bpy.context.view_layer.objects.active = None
+    assert not bpy.ops.curved_fold.fold.poll()
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="poll"):
+        bpy.ops.curved_fold.fold()
+    assert snapshot() == before
+
+
+def test_empty_source_list_message(extension):
+    common = mod(extension, "operators._common")
+    with pytest.raises(common.PatternError, match="no crease curves selected: select curve objects that have a"):
+        common.pattern_from_objects([])
+
+
+def test_fold_from_an_empty_collection_names_it(clean_scene):
+    border, crease = curved_pattern()
+    select_only([border, crease])  # the operator polls on the selection; the collection option overrides it
+    coll = bpy.data.collections.new("Empty Creases")
+    bpy.context.scene.collection.children.link(coll)
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="no crease curves selected"):
+        bpy.ops.curved_fold.fold(collection="Empty Creases")
+    with pytest.raises(RuntimeError, match="no collection named 'Missing'"):
+        bpy.ops.curved_fold.fold(collection="Missing")
+    assert snapshot() == before
+
+
+# ------------------------------------------------------------------------------------------ failing folds
+
+
+def _self_crossing():
+    pts = [(0, 0), (100, 60), (100, 0), (0, 60)]
+    return [make_curve("Bowtie", [line(pts[i], pts[(i + 1) % 4]) for i in range(4)], "BORDER", closed=True)]
+
+
+def _no_border():
+    return [make_curve("Lonely", [line((0, 0), (100, 0))], "VALLEY", 90.0)]
+
+
+def _degenerate_only():
+    return [make_curve("Dot", [np.array([[5.0, 5.0]] * 4)], "MOUNTAIN", -90.0)]
+
+
+def _absurd_scale():
+    border = square_border()
+    border.scale = (1e9, 1e9, 1.0)
+    return [border]
+
+
+@pytest.mark.parametrize(
+    ("build", "message"),
+    [
+        (_self_crossing, r"border crosses or touches itself .*Bowtie"),
+        (_no_border, r"all pattern vertices lie on one line"),
+        (_degenerate_only, r"no crease curves selected"),  # a zero-length spline is not read as a curve
+        (_absurd_scale, r"beyond ±1e\+08 mm"),
+    ],
+    ids=["self-crossing border", "no border", "degenerate curve only", "absurd scale"],
+)
+def test_failing_fold_leaves_scene_and_curves_unchanged(clean_scene, build, message):
+    objects = build()
+    bpy.context.view_layer.update()
+    select_only(objects)
+    before, curves = snapshot(), curve_state()
+    with pytest.raises(RuntimeError, match=message):
+        bpy.ops.curved_fold.fold()
+    assert snapshot() == before
+    assert curve_state() == curves
+
+
+def test_pattern_that_cannot_fold_is_reported_and_curves_kept(clean_scene):
+    """All mountains on concentric arcs (paper Fig. 7, examples/cannot_fold.svg imported as curves): the fold
+    finishes in a stable state, says "does not fold as assigned", and the curves are exactly as they were."""
+    path = Path(__file__).resolve().parents[1] / "examples" / "cannot_fold.svg"
+    if not path.is_file():
+        pytest.skip(f"{path} is absent")
+    assert bpy.ops.curved_fold.import_pattern(filepath=str(path)) == {"FINISHED"}
+    imported = list(bpy.context.selected_objects)
+    select_only(imported)
+    curves = curve_state()
+    assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+    ob = bpy.context.active_object
+    assert "does not fold as assigned" in ob.curved_fold_mesh.last_message
+    co = np.empty(3 * len(ob.data.vertices))
+    ob.data.vertices.foreach_get("co", co)
+    assert np.all(np.isfinite(co))
+    assert curve_state(set(curves)) == curves
+
+
+# ------------------------------------------------------------------------------------------ successful runs
+
+
+def test_fold_refold_bake_export_never_modify_curves(clean_scene, tmp_path):
+    border, crease = curved_pattern()
+    select_only([border, crease])
+    curves = curve_state()
+    mine = set(curves)
+    assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+    ob = bpy.context.active_object
+    assert curve_state(mine) == curves
+    ob.curved_fold_mesh.fold_percent = 60.0
+    assert bpy.ops.curved_fold.refold() == {"FINISHED"}
+    assert curve_state(mine) == curves
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 3
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    assert curve_state(mine) == curves
+    out = tmp_path / "folded.glb"
+    assert bpy.ops.curved_fold.export_folded(filepath=str(out), file_format="GLB") == {"FINISHED"}
+    assert out.is_file() and curve_state(mine) == curves
+    assert [p.name for p in tmp_path.iterdir()] == ["folded.glb"]  # no temporary file left behind
+
+
+def test_failing_bake_keeps_the_previous_bake(clean_scene):
+    """A bake that fails (the fold mesh was edited into quads after folding) keeps the shape keys and keyframes of
+    the previous bake, the mesh and the curves exactly as they were."""
+    import bmesh
+
+    border, crease = curved_pattern()
+    select_only([border, crease])
+    assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+    ob = bpy.context.active_object
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 3
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    keys = [k.name for k in ob.data.shape_keys.key_blocks]
+    assert len(keys) >= 3
+    # damage: join two triangles into a quad (as a user editing the folded mesh would)
+    bm = bmesh.new()
+    bm.from_mesh(ob.data)
+    interior = next(e for e in bm.edges if len(e.link_faces) == 2)
+    bmesh.ops.dissolve_edges(bm, edges=[interior])
+    bm.to_mesh(ob.data)
+    bm.free()
+    ob.data.update()
+    before, curves = snapshot(), curve_state()
+    with pytest.raises(RuntimeError, match="non-triangle faces"):
+        bpy.ops.curved_fold.bake()
+    assert snapshot() == before
+    assert [k.name for k in ob.data.shape_keys.key_blocks] == keys
+    assert curve_state() == curves
+
+
+# ------------------------------------------------------------------------------------------ imports and exports
+
+
+@pytest.mark.parametrize(
+    ("name", "data", "message"),
+    [
+        ("broken.svg", "<svg><path></svg>", r"malformed XML at line 1"),
+        (
+            "colours.svg",
+            '<svg xmlns="http://www.w3.org/2000/svg"><path d="M0 0 L1 1" stroke="#123456"/></svg>',
+            "no usable",
+        ),
+        (
+            "arrays.fold",
+            '{"vertices_coords": [[0, 0]], "edges_vertices": [[0, 3]], "edges_assignment": ["B"]}',
+            r"edges_vertices\[0\] = \[0, 3\]: index 3 out of range",
+        ),
+        ("empty.fold", "", r"malformed JSON at line 1, column 1"),
+    ],
+)
+def test_failing_import_leaves_scene_unchanged(clean_scene, tmp_path, name, data, message):
+    curved_pattern()
+    before = snapshot()
+    path = tmp_path / name
+    path.write_text(data)
+    with pytest.raises(RuntimeError, match=message):
+        bpy.ops.curved_fold.import_pattern(filepath=str(path))
+    assert snapshot() == before
+
+
+def test_failing_export_leaves_scene_and_old_file(clean_scene, tmp_path):
+    border, crease = curved_pattern()
+    select_only([border, crease])
+    assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="failed"):
+        bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "missing" / "out.fold"), file_format="FOLD")
+    assert snapshot() == before
+    assert not (tmp_path / "missing").exists()
+
+
+def test_atomic_write_replaces_whole_file_or_nothing(tmp_path):
+    dest = tmp_path / "pattern.fold"
+    atomic_write_text(dest, "old contents")
+    atomic_write_text(dest, "new contents")
+    assert dest.read_text() == "new contents"
+    # a destination that cannot be replaced (a non-empty directory of that name): error, nothing left behind
+    blocked = tmp_path / "blocked.fold"
+    blocked.mkdir()
+    (blocked / "keep.txt").write_text("x")
+    with pytest.raises(OSError):
+        atomic_write_bytes(blocked, b"data")
+    assert (blocked / "keep.txt").read_text() == "x"
+    # a write interrupted half-way (data that cannot be encoded) leaves the old file untouched
+    with pytest.raises(UnicodeEncodeError):
+        atomic_write_text(dest, "caf\udce9")
+    assert dest.read_text() == "new contents"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blocked.fold", "pattern.fold"]
+
+
+def test_atomic_write_into_missing_folder(tmp_path):
+    with pytest.raises(OSError):
+        atomic_write_text(tmp_path / "nope" / "x.svg", "<svg/>")
+    assert list(tmp_path.iterdir()) == []
+    assert not any(name.endswith(".tmp") for name in os.listdir(tmp_path))
+
+
+def test_export_overwrite_is_atomic(clean_scene, tmp_path):
+    """Exporting over an existing file replaces it in one move: the old file is never half-written."""
+    border, crease = curved_pattern()
+    select_only([border, crease])
+    assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+    out = tmp_path / "out.fold"
+    out.write_text("previous export")
+    inode = out.stat().st_ino
+    assert bpy.ops.curved_fold.export_folded(filepath=str(out), file_format="FOLD") == {"FINISHED"}
+    assert out.read_text().lstrip().startswith("{") and out.stat().st_ino != inode  # a new file moved into place
+    assert sorted(p.name for p in Path(tmp_path).iterdir()) == ["out.fold"]

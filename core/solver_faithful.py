@@ -16,11 +16,12 @@ fixtures this is 1.1–2× Origami Simulator's dt where theirs is stable, and sm
 
 Why the faithful run is slow (measured, see docs/solver.md): the damping acts on the *full* relative velocity of
 every bar, so it also damps rigid rotation of a panel about a crease. Folding a crease or bending a panel is then
-heavily over-damped: its relaxation time is about ``Σ c ℓ² / k_hinge`` (tens to hundreds of time units), i.e.
-10⁴–10⁶ steps per e-fold. The integrator is correct; it just creeps to the same equilibrium as the fast solver.
+heavily over-damped: its relaxation time is about ``Σ c ℓ² / k_hinge`` (hundreds of time units), i.e. 10⁴–10⁵
+steps per e-fold (simpleVertex: 27,000). The integrator is correct; it creeps to the fast solver's equilibrium.
 
-Divergence (non-finite positions, or a node leaving a sphere 50× the model) raises :class:`SolverError` naming the
-step and the quantity.
+Divergence (non-finite positions or velocities, a node leaving a sphere 50× the model, or a node moving more than
+the model's radius in one step; checked every ``check_every`` steps) raises :class:`SolverError` naming the step,
+dt and the quantity.
 """
 
 from __future__ import annotations

@@ -68,7 +68,8 @@ def measure(mesh: FoldMesh, result: FoldResult, percent: float) -> dict[str, Any
     crease = mesh.is_crease()
     if np.any(crease):
         err = np.abs(result.fold_angles[crease] - percent * mesh.fold_angles[crease])
-        out["fold_angle_error_mean_deg"] = float(np.nanmean(err))
+        # creases without two triangles have no simulated angle (nan): average the others, nan if there are none
+        out["fold_angle_error_mean_deg"] = float(np.nanmean(err)) if np.any(np.isfinite(err)) else float("nan")
     else:
         out.setdefault("fold_angle_error_mean_deg", 0.0)
     return out

@@ -3,7 +3,9 @@
 Two modes:
 
 * ``"quasi_static"`` — equilibrium per frame with the fast solver, warm-started from the last positions and fold
-  angles (θ history, so hinges keep unwrapping past ±180°). A 0 → 100 % jump is safe: Newton steps are capped and
+  angles (θ history, so hinges keep unwrapping past ±180°). After two frames the start is extrapolated linearly in
+  the fold percent from the last two equilibria (a predictor along the folding path; the Newton solve is the
+  corrector), limited to steps no larger than the last one. A 0 → 100 % jump is safe: Newton steps are capped and
   line-searched.
 * ``"dynamic"`` — Origami Simulator's behaviour: ``steps_per_frame`` explicit steps per frame with velocities carried
   over (no convergence test), like the app's 100 steps per rendered frame.
@@ -51,12 +53,30 @@ class FoldAnimation:
         self.positions = mesh.vertices_3d.copy()
         self.theta = np.zeros(len(self.solver.model.hinge_k))
         self.velocities = np.zeros_like(self.positions)
+        self._previous: tuple[float, np.ndarray, np.ndarray] | None = None
+        self.percent: float | None = None
+
+    def _predict(self, percent: float) -> tuple[np.ndarray, np.ndarray]:
+        """Start of the next quasi-static solve: the last equilibrium, extrapolated linearly in the fold percent."""
+        if self._previous is None or self.percent is None:
+            return self.positions, self.theta
+        p0, x0, t0 = self._previous
+        step = self.percent - p0
+        if step == 0:
+            return self.positions, self.theta
+        s = (float(percent) - self.percent) / step
+        if not 0 < s <= 1.0:  # reversing or jumping further than the last step: no extrapolation
+            return self.positions, self.theta
+        return self.positions + s * (self.positions - x0), self.theta + s * (self.theta - t0)
 
     def frame(self, percent: float) -> FrameResult:
         """Advance to fold percent ``percent`` (1.0 = 100 %) and return the frame."""
         t0 = time.perf_counter()
         if self.mode == "quasi_static":
-            r = self.solver.solve(percent, start=self.positions, theta_prev=self.theta)
+            start, theta = self._predict(percent)
+            r = self.solver.solve(percent, start=start, theta_prev=theta)
+            self._previous = (self.percent, self.positions, self.theta) if self.percent is not None else None
+            self.percent = float(percent)
         else:
             r = self.solver.solve(
                 percent,

@@ -45,3 +45,9 @@ demo: setup
 
 clean:
 	rm -rf dist out .pytest_cache .hypothesis
+
+# Benchmarks (issue 6): Table 1 beside the paper, speed vs error, scaling, fast/faithful ratios, under a time
+# budget (~8 min on 2 shared cores); writes docs/benchmarks.md, docs/img/bench_*.png and out/benchmarks.json.
+.PHONY: bench
+bench: setup
+	$(PY) -m curved_fold.benchmarks.run

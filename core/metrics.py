@@ -152,6 +152,19 @@ def warp_angles(mesh: FoldMesh, positions: np.ndarray, fold: np.ndarray | None =
     return out
 
 
+def warp_per_triangle(mesh: FoldMesh, positions: np.ndarray, warp: np.ndarray | None = None) -> np.ndarray:
+    """Warp angle per triangle (degrees) for display: the mean over its counted sides (:func:`warp_angles`), 0 where
+    none of its sides is counted."""
+    w = warp_angles(mesh, positions) if warp is None else np.asarray(warp, dtype=float)
+    f1, f2, _, _ = edge_triangles(mesh)
+    faces = np.concatenate([f1, f2])
+    vals = np.concatenate([w, w])
+    ok = (faces >= 0) & np.isfinite(vals)
+    total = np.bincount(faces[ok], weights=vals[ok], minlength=mesh.n_faces)
+    count = np.bincount(faces[ok], minlength=mesh.n_faces)
+    return total / np.maximum(count, 1)
+
+
 def interior_vertices(mesh: FoldMesh) -> np.ndarray:
     """Mask of vertices not on the mesh boundary."""
     f1, f2, _, _ = edge_triangles(mesh)

@@ -2,8 +2,8 @@
 
 :func:`fold_pattern` is what the CLI, the operators and the benchmarks call. It fills missing crease angles
 (``angle``), builds the mesh (``core.meshing.build_mesh``), solves (``core.solver``) and measures the result with
-``core.metrics.summary`` when that module is present (it belongs to the MESH helper); otherwise it computes the
-Origami Simulator strain and the fold-angle error itself and leaves the warp angle ``nan``.
+``core.metrics.summary``. :func:`refold_mesh` re-solves an already built mesh (the operators' re-fold and live
+paths) and reports the same figures, including the "does not fold as assigned" verdict (paper Fig. 7).
 """
 
 from __future__ import annotations
@@ -43,36 +43,68 @@ def _with_angle(pattern: CreasePattern, angle: float | None) -> CreasePattern:
     return replace(pattern, fold_angles=angles)
 
 
-def strain_per_node(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray:
-    """Origami Simulator's per-node strain: mean over incident edges of |ℓ/L0 − 1| (reference §3.9)."""
-    i, j = mesh.edges[:, 0], mesh.edges[:, 1]
-    flat = mesh.vertices_3d
-    ratio = np.abs(np.linalg.norm(positions[j] - positions[i], axis=1) / np.linalg.norm(flat[j] - flat[i], axis=1) - 1)
-    total = np.bincount(np.concatenate([i, j]), weights=np.concatenate([ratio, ratio]), minlength=mesh.n_vertices)
-    degree = np.bincount(np.concatenate([i, j]), minlength=mesh.n_vertices)
-    return total / np.maximum(degree, 1)
-
-
 def measure(mesh: FoldMesh, result: FoldResult, percent: float) -> dict[str, Any]:
-    """Strain, warp and fold-angle error of a result (``core.metrics.summary`` when available)."""
-    out: dict[str, Any] = {}
-    try:
-        from . import metrics  # MESH helper's module
+    """Strain, warp, angle defect (``core.metrics.summary``) and the fold-angle error of the solver's own angles."""
+    from . import metrics
 
-        out.update(metrics.summary(mesh, result.positions))
-    except ImportError:
-        strain = strain_per_node(mesh, result.positions)
-        out["strain_mean_pct"] = float(100 * strain.mean())
-        out["strain_max_pct"] = float(100 * strain.max())
-        out["warp_mean_deg"] = float("nan")
+    out: dict[str, Any] = dict(metrics.summary(mesh, result.positions, percent=percent))
     crease = mesh.is_crease()
     if np.any(crease):
         err = np.abs(result.fold_angles[crease] - percent * mesh.fold_angles[crease])
         # creases without two triangles have no simulated angle (nan): average the others, nan if there are none
         out["fold_angle_error_mean_deg"] = float(np.nanmean(err)) if np.any(np.isfinite(err)) else float("nan")
     else:
-        out.setdefault("fold_angle_error_mean_deg", 0.0)
+        out["fold_angle_error_mean_deg"] = 0.0
     return out
+
+
+def make_report(
+    mesh: FoldMesh, result: FoldResult, percent: float, *, mesh_type: str, solver: str, warnings: list[str]
+) -> dict[str, Any]:
+    """The JSON-ready report of one solve: sizes, timings, solver counts, metrics and the Fig. 7 verdict."""
+    report: dict[str, Any] = {
+        "vertices": int(mesh.n_vertices),
+        "faces": int(mesh.n_faces),
+        "mesh_type": mesh_type,
+        "solver": solver,
+        "percent": float(percent),
+        "generation_ms": float(mesh.generation_ms),
+        "simulation_ms": float(result.simulation_ms),
+        "iterations": int(result.iterations),
+        "force_evaluations": int(result.force_evaluations),
+        "hessian_assemblies": int(result.hessian_assemblies),
+        "linear_solves": int(result.linear_solves),
+        "hessian_products": int(result.hessian_products),
+        "converged": bool(result.converged),
+        "residual": float(result.residual),
+        "energy": float(result.energy),
+        "message": result.message,
+        "warnings": list(warnings),
+    }
+    # metrics.summary also reports mesh counts (as floats): keep the report's own integer counts
+    report.update({k: v for k, v in measure(mesh, result, percent).items() if k not in report})
+    bad = report.get("fold_angle_error_mean_deg", 0.0) > DOES_NOT_FOLD_DEG
+    report["does_not_fold_as_assigned"] = bool(bad)
+    if bad:
+        report["does_not_fold_message"] = (
+            f"the creases end {report['fold_angle_error_mean_deg']:.1f}° (mean) away from their targets: the pattern "
+            "does not fold as assigned with this triangulation (paper Fig. 7); try another mesh type or add facets"
+        )
+    return report
+
+
+def refold_mesh(
+    mesh: FoldMesh,
+    percent: float = 1.0,
+    *,
+    solver: str = "fast",
+    settings: SolverSettings | None = None,
+    start: np.ndarray | None = None,
+) -> FoldRun:
+    """Fold an already built mesh at ``percent`` (warm-started from ``start``, positions in mm, if given)."""
+    result = Solver(mesh, settings, solver).solve(percent, start=start)
+    report = make_report(mesh, result, percent, mesh_type=mesh.mesh_type, solver=solver, warnings=list(mesh.warnings))
+    return FoldRun(mesh, result, report)
 
 
 def fold_pattern(
@@ -94,32 +126,6 @@ def fold_pattern(
     pattern = _with_angle(pattern, angle)
     mesh = build_mesh(pattern, mesh_type=mesh_type, backend=backend)
     result = Solver(mesh, settings, solver).solve(percent)
-    report: dict[str, Any] = {
-        "vertices": int(mesh.n_vertices),
-        "faces": int(mesh.n_faces),
-        "mesh_type": mesh_type,
-        "solver": solver,
-        "percent": float(percent),
-        "generation_ms": float(mesh.generation_ms),
-        "simulation_ms": float(result.simulation_ms),
-        "iterations": int(result.iterations),
-        "force_evaluations": int(result.force_evaluations),
-        "hessian_assemblies": int(result.hessian_assemblies),
-        "linear_solves": int(result.linear_solves),
-        "hessian_products": int(result.hessian_products),
-        "converged": bool(result.converged),
-        "residual": float(result.residual),
-        "energy": float(result.energy),
-        "message": result.message,
-        "warnings": list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings),
-    }
-    # metrics.summary also reports mesh counts (as floats): keep the pipeline's own integer counts
-    report.update({k: v for k, v in measure(mesh, result, percent).items() if k not in report})
-    bad = report.get("fold_angle_error_mean_deg", 0.0) > DOES_NOT_FOLD_DEG
-    report["does_not_fold_as_assigned"] = bool(bad)
-    if bad:
-        report["does_not_fold_message"] = (
-            f"the creases end {report['fold_angle_error_mean_deg']:.1f}° (mean) away from their targets: the pattern "
-            "does not fold as assigned with this triangulation (paper Fig. 7); try another mesh type or add facets"
-        )
+    warnings = list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings)
+    report = make_report(mesh, result, percent, mesh_type=mesh_type, solver=solver, warnings=warnings)
     return FoldRun(mesh, result, report)

@@ -16,10 +16,6 @@ from ..core.pattern import PatternError
 from ..scene import mesh_object
 from ..scene.fold_settings import settings_dict
 
-FOLD_ERROR_WARN_DEG = 10.0
-"""Mean |simulated − target·percent| fold angle (degrees) above which a fold is reported as not folding as assigned
-(the paper's Fig. 7 situation), when the engine does not raise the flag itself."""
-
 
 @dataclass
 class FoldOutcome:
@@ -91,58 +87,17 @@ def pattern_from_objects(objects, *, interval: float = 0.0, tolerance: float = 0
     return discretize(curves, interval=interval or None, tolerance=tolerance or None)
 
 
-def per_node_strain_pct(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray:
-    """Origami Simulator's per-node strain in percent: mean over incident bars of |ℓ/L0 − 1|·100 (vectorised)."""
-    try:
-        from ..core import metrics
+def display_metrics(mesh: FoldMesh, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-node strain (%) and per-triangle warp angle (degrees) for the viewport colours (``core.metrics``)."""
+    from ..core import metrics
 
-        return 100.0 * np.asarray(metrics.strain(mesh, positions), dtype=np.float64)  # documented as a fraction
-    except (ImportError, AttributeError):
-        pass
-    flat = mesh.vertices_3d
-    e = mesh.edges
-    L0 = np.linalg.norm(flat[e[:, 1]] - flat[e[:, 0]], axis=1)
-    ln = np.linalg.norm(positions[e[:, 1]] - positions[e[:, 0]], axis=1)
-    s = np.abs(ln / np.where(L0 > 0, L0, 1.0) - 1.0)
-    total = np.bincount(e.ravel(), weights=np.repeat(s, 2), minlength=mesh.n_vertices)
-    deg = np.bincount(e.ravel(), minlength=mesh.n_vertices)
-    return 100.0 * total / np.maximum(deg, 1)
+    return 100.0 * metrics.strain(mesh, positions), metrics.warp_per_triangle(mesh, positions)
 
 
-def warp_per_face(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray | None:
-    """Warp angle per triangle (degrees) if ``core.metrics.warp_angles`` gives per-edge or per-face values."""
-    try:
-        from ..core import metrics
-
-        w = np.asarray(metrics.warp_angles(mesh, positions), dtype=np.float64).reshape(-1)
-    except (ImportError, AttributeError, TypeError, ValueError):
-        return None
-    if len(w) == mesh.n_faces or len(w) == mesh.n_vertices:
-        return w
-    if len(w) == len(mesh.edges):  # per edge: each triangle gets the mean of its counted sides (0 if none)
-        n = mesh.n_vertices
-        keys = mesh.edges[:, 0] * n + mesh.edges[:, 1]
-        order = np.argsort(keys)
-        tri = mesh.triangles
-        sides = np.sort(np.stack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]], axis=1), axis=2)
-        sk = sides[..., 0] * n + sides[..., 1]
-        idx = order[np.searchsorted(keys[order], sk)]
-        vals = w[idx]
-        finite = np.isfinite(vals)
-        return np.where(finite, vals, 0.0).sum(axis=1) / np.maximum(finite.sum(axis=1), 1)
-    return None
-
-
-def fold_angle_error_message(report: dict, percent: float) -> str:
-    """The paper's Fig. 7 message when the pattern did not fold as assigned, else ``""``."""
+def fold_angle_error_message(report: dict) -> str:
+    """The paper's Fig. 7 message when the engine judged the pattern as not folding as assigned, else ``""``."""
     if report.get("does_not_fold_as_assigned"):
         return str(report.get("does_not_fold_message") or "does not fold as assigned (large fold-angle error)")
-    err = report.get("fold_angle_error_mean_deg")
-    if err is not None and np.isfinite(err) and err > FOLD_ERROR_WARN_DEG:
-        return (
-            f"does not fold as assigned: mean fold-angle error {err:.1f}° at {100 * percent:.0f} % "
-            f"(over {FOLD_ERROR_WARN_DEG:.0f}°); check mountain/valley roles and angles"
-        )
     return ""
 
 
@@ -152,13 +107,14 @@ def outcome_from_run(run, percent: float) -> FoldOutcome:
     pos = np.asarray(result.positions, dtype=np.float64)
     if not np.all(np.isfinite(pos)):
         raise FloatingPointError("the solver returned non-finite positions (the fold diverged)")
-    report = dict(getattr(run, "report", {}) or {})
+    report = dict(run.report)
+    strain_pct, warp_deg = display_metrics(mesh, pos)
     return FoldOutcome(
         mesh=mesh,
         positions=pos,
-        fold_angles=getattr(result, "fold_angles", None),
-        strain_pct=per_node_strain_pct(mesh, pos),
-        warp_deg=warp_per_face(mesh, pos),
+        fold_angles=result.fold_angles,
+        strain_pct=strain_pct,
+        warp_deg=warp_deg,
         report=report,
         warnings=[str(w) for w in report.get("warnings", mesh.warnings)],
     )
@@ -202,32 +158,13 @@ def resolve_stored(
     max_iterations: int | None = None,
 ):
     """Re-solve the FoldMesh stored on ``ob`` (no rebuild) with its current settings."""
-    from ..core.solver import solve
+    from ..core.pipeline import refold_mesh
 
     props = ob.curved_fold_mesh
     mesh = mesh_object.read_fold_mesh(ob)
     pct = props.fold_percent / 100.0 if percent is None else percent
     settings = solver_settings(props, max_iterations=max_iterations)
-    result = solve(mesh, pct, method=props.solver, settings=settings, start=start)
-    run = type("Run", (), {"mesh": mesh, "result": result, "report": _report(mesh, result, pct)})()
-    return outcome_from_run(run, pct)
-
-
-def _report(mesh: FoldMesh, result, percent: float) -> dict:
-    rep = {
-        "vertices": mesh.n_vertices,
-        "faces": mesh.n_faces,
-        "simulation_ms": float(getattr(result, "simulation_ms", 0.0)),
-        "iterations": int(getattr(result, "iterations", 0)),
-        "converged": bool(getattr(result, "converged", False)),
-    }
-    try:
-        from ..core import metrics
-
-        rep.update(metrics.summary(mesh, result.positions, percent=percent))
-    except (ImportError, AttributeError, TypeError):
-        pass
-    return rep
+    return outcome_from_run(refold_mesh(mesh, pct, solver=props.solver, settings=settings, start=start), pct)
 
 
 def source_objects(ob: bpy.types.Object) -> list[bpy.types.Object]:
@@ -261,16 +198,13 @@ def store_figures(ob: bpy.types.Object, out: FoldOutcome) -> None:
     props.last_ms = float(rep.get("simulation_ms", 0.0) or 0.0)
     props.last_iterations = int(rep.get("iterations", 0) or 0)
     props.last_converged = bool(rep.get("converged", False))
-    strain = out.strain_pct if out.strain_pct is not None else np.zeros(1)
-    props.last_strain_mean = float(rep.get("strain_mean_pct", np.mean(strain)))
-    props.last_strain_max = float(rep.get("strain_max_pct", np.max(strain)))
-    warp = rep.get("warp_mean_deg")
-    if warp is None and out.warp_deg is not None:
-        warp = float(np.nanmean(out.warp_deg))
-    props.last_warp_mean = float(warp or 0.0)
+    props.last_strain_mean = float(rep["strain_mean_pct"])
+    props.last_strain_max = float(rep["strain_max_pct"])
+    warp = rep["warp_mean_deg"]
+    props.last_warp_mean = float(warp) if np.isfinite(warp) else 0.0
     err = rep.get("fold_angle_error_mean_deg")
     props.last_fold_error = float(err) if err is not None and np.isfinite(err) else 0.0
-    props.last_message = fold_angle_error_message(rep, props.fold_percent / 100.0)
+    props.last_message = fold_angle_error_message(rep)
 
 
 def figures_text(props) -> str:

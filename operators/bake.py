@@ -117,18 +117,10 @@ class BakeJob:
         ob = bpy.data.objects[self.ob_name]
         bake.bake_shape_keys(ob, self.frames, self.positions, scene=scene)
         ob.curved_fold_mesh.baked_frames = len(self.frames)
-        out = _common.FoldOutcome(
-            mesh=self.mesh,
-            positions=self.positions[-1],
-            fold_angles=None,
-            strain_pct=_common.per_node_strain_pct(self.mesh, self.positions[-1]),
-            warp_deg=_common.warp_per_face(self.mesh, self.positions[-1]),
-        )
+        strain_pct, warp_deg = _common.display_metrics(self.mesh, self.positions[-1])
         me = ob.data
-        if out.strain_pct is not None:
-            mesh_object.write_colours(me, "cf_strain", out.strain_pct, mesh_object.STRAIN_CLIP_PCT)
-        if out.warp_deg is not None:
-            mesh_object.write_colours(me, "cf_warp", out.warp_deg, mesh_object.WARP_CLIP_DEG)
+        mesh_object.write_colours(me, "cf_strain", strain_pct, mesh_object.STRAIN_CLIP_PCT)
+        mesh_object.write_colours(me, "cf_warp", warp_deg, mesh_object.WARP_CLIP_DEG)
         return ob
 
     def summary(self) -> str:

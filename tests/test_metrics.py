@@ -121,3 +121,19 @@ def test_strain_and_defect_detect_stretching() -> None:
     assert np.isfinite(defect).sum() == case.n_segments - 1  # only the interior crease vertices are interior
     assert abs(defect[5]) > 1e-2
     assert np.nanmax(np.abs(metrics.angle_defect(mesh, p))) < 1e-9
+
+
+def test_warp_per_triangle_is_the_mean_of_its_counted_sides() -> None:
+    """The display value of each triangle is the plain mean of the warp of those of its sides that are counted."""
+    case = bisector_case(n_segments=12)
+    mesh = build_mesh(case.pattern, "cdt")
+    rng = np.random.default_rng(5)
+    pos = case.folded_positions(100.0)[: mesh.n_vertices] + rng.normal(scale=0.3, size=(mesh.n_vertices, 3))
+    per_edge = metrics.warp_angles(mesh, pos)
+    per_tri = metrics.warp_per_triangle(mesh, pos)
+    index = {tuple(e): k for k, e in enumerate(mesh.edges.tolist())}
+    assert np.isfinite(per_edge).sum() > 10
+    for t, tri in enumerate(mesh.triangles.tolist()):
+        sides = [per_edge[index[tuple(sorted((tri[k], tri[(k + 1) % 3])))]] for k in range(3)]
+        counted = [w for w in sides if np.isfinite(w)]
+        assert per_tri[t] == pytest.approx(np.mean(counted) if counted else 0.0)

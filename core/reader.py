@@ -1,8 +1,8 @@
 """Read a crease pattern from any supported file: SVG, FOLD or a .blend file's crease curves.
 
 :func:`read_pattern` dispatches on the suffix and always returns a discretised :class:`~.pattern.CreasePattern`;
-:func:`read_curves` returns the exact :class:`~.pattern.CreaseCurve` objects (for the Import operator, which turns
-them into Blender curves). Reading a .blend file needs Blender's ``bpy`` and is delegated lazily to
+:func:`read_curves` returns :class:`~.pattern.CreaseCurve` objects (exact curves; polylines for FOLD) for the Import
+operator, which turns them into Blender curves. Reading a .blend file needs Blender's ``bpy`` and is delegated lazily to
 ``scene.curves.read_blend_file`` so this module never imports bpy itself.
 """
 
@@ -42,7 +42,8 @@ def _suffix(path: Path) -> str:
 
 
 def read_curves(path: str | os.PathLike[str]) -> tuple[list[CreaseCurve], list[str]]:
-    """The exact crease curves of an .svg or .blend file, and the warnings met reading them."""
+    """The crease curves of a file and the warnings met reading them: exact curves from .svg and .blend, polylines
+    (segments chained through vertices where two meet, ``core.polylines``) from .fold."""
     p = Path(path)
     suffix = _suffix(p)
     if suffix == ".svg":
@@ -52,7 +53,11 @@ def read_curves(path: str | os.PathLike[str]) -> tuple[list[CreaseCurve], list[s
         return drawing.curves, list(drawing.warnings)
     if suffix == ".blend":
         return _blend_curves(p), []
-    raise PatternError(f"{p.name}: a FOLD file holds straight segments only, not curves; use read_pattern")
+    from .fold_format import fold_to_pattern, read_fold
+    from .polylines import curves_from_pattern
+
+    pattern = fold_to_pattern(read_fold(p))
+    return curves_from_pattern(pattern), list(pattern.warnings)
 
 
 def read_pattern(

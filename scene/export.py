@@ -171,7 +171,7 @@ def write_pattern_svg(path: str | Path, mesh: FoldMesh, *, stroke_width: float |
         f"<!-- Curved Fold crease pattern: {int(drawn.sum())} segments, Origami Simulator colours, "
         "opacity = |fold angle| / 180 -->",
     ]
-    from .mesh_object import chain_edges
+    from ..core.polylines import chain_edges
 
     for a in SVG_STROKES:
         for poly in np.unique(mesh.edge_polyline[drawn & (mesh.assignments == a)]):

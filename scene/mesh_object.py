@@ -28,6 +28,7 @@ import numpy as np
 
 from ..core.mesh import FoldMesh
 from ..core.pattern import ASSIGNMENTS
+from ..core.polylines import chain_edges
 
 CREASE_COLOURS = {"M": (1.0, 0.0, 0.0, 1.0), "V": (0.0, 0.1, 1.0, 1.0)}
 """Viewport colours of crease edges, as Origami Simulator draws them (mountain red, valley blue)."""
@@ -142,43 +143,6 @@ def _material(name: str, colour: tuple[float, float, float, float]) -> bpy.types
         except (AttributeError, KeyError, TypeError):  # pragma: no cover - node API differences
             pass
     return mat
-
-
-def chain_edges(edges: np.ndarray) -> list[np.ndarray]:
-    """Split an edge set into chains of vertex indices: walks through vertices of degree 2, ends at branch points.
-
-    Open chains start at their ends; what is left are closed loops (first vertex repeated at the end). Used for the
-    crease-curve children and the SVG export; not on any solver path.
-    """
-    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
-    adjacency: dict[int, list[int]] = {}
-    for k, (a, b) in enumerate(edges.tolist()):
-        adjacency.setdefault(a, []).append(k)
-        adjacency.setdefault(b, []).append(k)
-    used = np.zeros(len(edges), dtype=bool)
-    chains: list[np.ndarray] = []
-
-    def walk(start: int, k: int | None) -> np.ndarray:
-        chain = [start]
-        v = start
-        while k is not None and not used[k]:
-            used[k] = True
-            a, b = edges[k]
-            v = int(b if a == v else a)
-            chain.append(v)
-            nxt = [j for j in adjacency[v] if not used[j]]
-            k = nxt[0] if len(adjacency[v]) == 2 and nxt else None
-        return np.array(chain, dtype=np.int64)
-
-    for v, ks in adjacency.items():
-        if len(ks) != 2:
-            for k in ks:
-                if not used[k]:
-                    chains.append(walk(v, k))
-    for k in range(len(edges)):
-        if not used[k]:
-            chains.append(walk(int(edges[k][0]), k))
-    return chains
 
 
 def crease_polylines(mesh: FoldMesh, assignment: str) -> list[np.ndarray]:

@@ -227,8 +227,11 @@ def test_reader_dispatch_and_errors(tmp_path: Path) -> None:
     fold = tmp_path / "s.fold"
     fold.write_text(fold_text())
     assert read_pattern(fold).count("V") == 1
-    with pytest.raises(PatternError, match="FOLD file holds straight segments only"):
-        read_curves(fold)
+    fold_curves, _ = read_curves(fold)  # FOLD segments come back as straight polylines, one per chain
+    pat = read_pattern(fold)
+    assert all(seg.kind == "line" for c in fold_curves for seg in c.segments)
+    for a in set(pat.assignments.tolist()):
+        assert sum(len(c.segments) for c in fold_curves if c.assignment == a) == pat.count(a)
     curves, warnings = read_curves(EXAMPLES / "single_curve.svg")
     assert len(curves) == 2 and warnings == []
     p = read_pattern(EXAMPLES / "single_curve.svg", interval=3.0, tolerance=0.01)

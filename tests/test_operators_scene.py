@@ -16,7 +16,8 @@ bpy = pytest.importorskip("bpy")
 
 from curved_fold.core.mesh import FoldMesh  # noqa: E402
 from curved_fold.core.pattern import CreasePattern  # noqa: E402
-from curved_fold.scene import bake, export, import_curves, mesh_object  # noqa: E402
+from curved_fold.core.polylines import curves_from_pattern  # noqa: E402
+from curved_fold.scene import bake, export, mesh_object  # noqa: E402
 
 
 @pytest.fixture
@@ -280,7 +281,7 @@ def test_curves_from_pattern_chains_segments():
         edge_from_curve=[0] * 8,
         sources=["valley", "mountain", "border"],
     )
-    curves = import_curves.curves_from_pattern(pat)
+    curves = curves_from_pattern(pat)
     by = {c.assignment: c for c in curves}
     assert len(curves) == 3
     assert len(by["V"].segments) == 3 and by["V"].fold_angle == 90 and not by["V"].closed

@@ -150,17 +150,20 @@ def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budge
 
 def _segment_polyline(
     seg: CurveSegment, assignment: str, interval: float, tolerance: float, budget: int
-) -> tuple[np.ndarray, bool]:
-    """Polyline points of one drawn segment and whether they discretise a curve (see module docstring)."""
+) -> tuple[np.ndarray, bool, float]:
+    """Polyline points of one drawn segment, whether they discretise a curve (see module docstring), and the
+    largest distance of a chord's curve midpoint from the chord (0 for straight segments): above ``tolerance``
+    when refinement stopped at the budget."""
     start, end = seg.points[0], seg.points[-1]
     if seg.is_straight:
         # Straight border segments are subdivided after the planar clean-up (see _subdivide_border), so their
         # pieces are spread evenly between the junctions the designer drew and never leave slivers next to them.
-        return np.array([start, end], dtype=float), False
+        return np.array([start, end], dtype=float), False, 0.0
     t = curve_parameters(seg, interval, tolerance, budget)
     pts = seg.evaluate(t)
     pts[0], pts[-1] = start, end  # exact joints with the neighbouring segments
-    return pts, True
+    worst = float(_point_segment_distance(seg.evaluate(0.5 * (t[:-1] + t[1:])), pts[:-1], pts[1:]).max())
+    return pts, True, worst
 
 
 # ---------------------------------------------------------------------------------------------------- arrangement
@@ -514,6 +517,14 @@ def discretize(
         raise PatternError(f"discretisation: merge tolerance must be ≥ 0 mm, got {merge_tolerance!r}")
     warnings: list[str] = []
     sources = [c.source or f"curve {k}" for k, c in enumerate(curves)]
+    if interval < merge_tolerance:
+        # pieces shorter than the merge tolerance are welded together again (curves) or left as slivers below it
+        # (border subdivision, which runs after merging): never useful, and it multiplies the vertex count
+        warnings.append(
+            f"discretisation capped: interval {interval:g} mm is below the merge tolerance {merge_tolerance:g} mm; "
+            f"used {merge_tolerance:g} mm"
+        )
+        interval = merge_tolerance
 
     # -- explosion guard: estimate the count first, enlarge the parameters if needed
     estimate = 0.0
@@ -540,16 +551,19 @@ def discretize(
     seg_a, seg_b, polyline, from_curve = [], [], [], []
     total = 0
     hit_budget = False
+    below_merge: list[int] = []  # curves whose chords had to be shorter than the merge tolerance
     for k in order:
         c = curves[k]
         if c.assignment not in PRIORITY:
             raise PatternError(f"{sources[k]}: unknown assignment {c.assignment!r}")
         for seg in c.segments:
             budget = max(2, MAX_SEGMENTS - total)
-            pts, curved = _segment_polyline(seg, c.assignment, interval, tolerance, budget)
+            pts, curved, worst = _segment_polyline(seg, c.assignment, interval, tolerance, budget)
             n = len(pts) - 1
-            if curved and n >= budget:
+            if curved and (n >= budget or worst > tolerance * (1 + 1e-9)):
                 hit_budget = True
+            if curved and n > 1 and float(np.hypot(*np.diff(pts, axis=0).T).min()) < merge_tolerance:
+                below_merge.append(k)
             seg_a.append(pts[:-1])
             seg_b.append(pts[1:])
             polyline.append(np.full(n, k))
@@ -559,6 +573,12 @@ def discretize(
         warnings.append(
             f"discretisation stopped refining at {MAX_SEGMENTS} segments: tolerance {tolerance:g} mm was not "
             "reached on every curve; pass a larger --tolerance"
+        )
+    if below_merge:
+        warnings.append(
+            f"tolerance {tolerance:g} mm needs curve chords shorter than the merge tolerance {merge_tolerance:g} mm "
+            f"on {_describe_sources(sources, np.array(below_merge))}: points closer than that are merged, so those "
+            "curves are followed less closely than asked; pass a larger --tolerance"
         )
     a = np.concatenate(seg_a)
     b = np.concatenate(seg_b)

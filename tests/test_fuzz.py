@@ -45,6 +45,8 @@ CATALOGUE: dict[str, str] = {
     "edge not in triangulation": r"triangulation: pattern edge \d+ \(.*\) is not an edge of the triangulation",
     "vertex not in triangulation": r"triangulation: pattern vertex \d+ at \[.*\] mm is not in the triangulation",
     "degenerate triangle": r"(triangle \d+ .* is degenerate|has zero length)",
+    "absurd coordinates": r"coordinate .* mm in a \w+ segment is beyond",
+    "microscopic sheet": r"the sheet is only .* mm across \(minimum",
 }
 """Catalogued rejections (docs/errors.md): a short name → the regular expression its message must match."""
 
@@ -76,7 +78,7 @@ unit = st.floats(min_value=0.0, max_value=1.0, allow_nan=False)
 @st.composite
 def borders(draw) -> tuple[CreaseCurve, float]:
     """A random sheet outline and its size (mm): rectangle, star-shaped polygon, or a wobbly closed Bézier loop."""
-    size = draw(st.sampled_from([1.0, 20.0, 150.0, 600.0]))
+    size = draw(st.sampled_from([1.0, 20.0, 150.0, 600.0, 150.0, 150.0, 1e-4, 1e9]))
     kind = draw(st.sampled_from(["rectangle", "polygon", "bezier"]))
     if kind == "rectangle":
         aspect = draw(st.floats(min_value=0.05, max_value=1.0))
@@ -107,9 +109,18 @@ def borders(draw) -> tuple[CreaseCurve, float]:
 @st.composite
 def crease_patterns(draw) -> list[CreaseCurve]:
     """A random border with 1–5 random creases: cubic or straight, ends anywhere in (or a little past) the sheet,
-    random role (mountain, valley, facet, undriven, cut) and angle (none, or any in ±180°)."""
+    random role (mountain, valley, facet, undriven, cut) and angle (none, or any in ±180°).
+
+    Now and then the input is damaged the ways designers damage it: the border is left out or left open, a crease
+    is drawn twice, a crease collapses to a point, the sheet is microscopic or absurdly large (sizes above)."""
     border, size = draw(borders())
-    curves = [border]
+    damage = draw(st.sampled_from(["none"] * 6 + ["no border", "open border", "duplicate", "point"]))
+    if damage == "no border":
+        curves = []
+    elif damage == "open border" and len(border.segments) > 1:
+        curves = [CreaseCurve(border.segments[:-1], "B", None, closed=False, source=border.source + " (open)")]
+    else:
+        curves = [border]
     for k in range(draw(st.integers(min_value=1, max_value=5))):
 
         def point():
@@ -126,6 +137,12 @@ def crease_patterns(draw) -> list[CreaseCurve]:
         elif role in ("U", "C"):
             angle = None
         curves.append(CreaseCurve([seg], role, angle, source=f"fuzz crease {k}"))
+    if damage == "duplicate":
+        twin = curves[-1]
+        curves.append(CreaseCurve(list(twin.segments), draw(st.sampled_from(["M", "V"])), None, source="fuzz twin"))
+    elif damage == "point":
+        p = np.full((4, 2), 0.5 * size)
+        curves.append(CreaseCurve([_cubic(p)], "V", 90.0, source="fuzz point"))
     return curves
 
 
@@ -155,9 +172,13 @@ def fold_outcome(curves: list[CreaseCurve], *, angle: float = 90.0, time_limit: 
     assert math.isfinite(report["strain_max_pct"]) and report["strain_max_pct"] < STRAIN_BOUND_PCT, report
     assert report["iterations"] <= SolverSettings().max_iterations
     assert seconds < TIME_BOUND_S, f"one pattern took {seconds:.1f} s"
+    detail = "does not fold as assigned" if report["does_not_fold_as_assigned"] else "folded"
+    if not report["converged"]:
+        detail += " (stopped at the iteration cap, residual given)"
+        assert "residual" in report["message"], report["message"]
     return Outcome(
         "folded",
-        "does not fold as assigned" if report["does_not_fold_as_assigned"] else "folded",
+        detail,
         faces=int(report["faces"]),
         strain_max_pct=float(report["strain_max_pct"]),
         iterations=int(report["iterations"]),

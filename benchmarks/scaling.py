@@ -27,8 +27,8 @@ from curved_fold.core.solver import Solver, SolverSettings
 
 from .common import IMG, fit_exponent, peak_memory
 
-SIZES = ((3, 10.0), (8, 4.0), (12, 2.5), (16, 1.6), (24, 0.8), (30, 0.3))
-"""(pleats, interval mm): about 150, 500, 1,200, 2,200, 6,500 and 21,000 faces."""
+SIZES = ((3, 10.0), (8, 4.0), (12, 2.5), (16, 1.6), (24, 0.8), (28, 0.5), (30, 0.3))
+"""(pleats, interval mm): about 150, 500, 1,100, 2,200, 6,500, 11,000 and 21,000 faces."""
 
 
 def pleats_pattern(n: int, interval: float, size: float = 100.0) -> CreasePattern:

@@ -51,3 +51,8 @@ clean:
 .PHONY: bench
 bench: setup
 	$(PY) -m curved_fold.benchmarks.run
+
+# Long property-based fuzz of the engine (docs/errors.md); the CI profile is tests/test_fuzz.py.
+.PHONY: fuzz
+fuzz: setup
+	$(PY) tools/fuzz_long.py --examples 2000 --seed 1

@@ -170,8 +170,10 @@ def test_bistable_curved_pleat_is_stable_and_repeatable() -> None:
     assert np.allclose(again.result.positions, run.result.positions, atol=1e-6 * run.mesh.diagonal)
     settled = Solver(run.mesh).solve(1.0, start=run.result.positions, theta_prev=run.result.theta)
     assert settled.converged
-    # same shape (the warm-started Newton solve may move the whole sheet rigidly: only the shape is compared)
-    assert rigid_rms(settled.positions, run.result.positions) < 1e-3 * run.mesh.diagonal
+    # theta_prev carries the unwrapped angles: the 180° creases of this pattern sit at the ±180° seam, and a warm
+    # start without them lands on the other branch (measured: 19.5 mm RMS shape change)
+    assert settled.iterations <= 3
+    assert np.abs(settled.positions - run.result.positions).max() < 1e-6 * run.mesh.diagonal
     # half-way and back to flat: no stray branch, flat again at 0 %
     anim = FoldAnimation(run.mesh)
     for pct in (0.5, 1.0, 0.5, 0.0):

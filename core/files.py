@@ -2,7 +2,9 @@
 
 Data is written to a temporary file in the destination's own folder (so the final rename stays on one file system),
 flushed and fsynced, then moved over the destination with :func:`os.replace`, which is atomic on POSIX and Windows.
-If anything fails the temporary file is removed and the destination is left untouched.
+If anything fails the temporary file is removed and the destination is left untouched. The file gets the mode a plain
+``open(path, "w")`` would give it (an existing file keeps its mode; a new one 0o666 less the umask), not the private
+0o600 of a temporary file.
 """
 
 from __future__ import annotations
@@ -10,6 +12,16 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+
+
+def _final_mode(dest: Path) -> int:
+    """The permission bits ``dest`` would have if written in place."""
+    try:
+        return dest.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
@@ -25,6 +37,7 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
+        os.chmod(tmp_name, _final_mode(dest))
         os.replace(tmp_name, dest)
     except BaseException:
         try:

@@ -260,3 +260,23 @@ def test_atomic_writes_replace_whole_files_and_leave_nothing_on_failure(tmp_path
     with pytest.raises(TypeError):
         atomic_write_bytes(target, "not bytes")  # type: ignore[arg-type]
     assert target.read_bytes() == b"second" and sorted(os.listdir(tmp_path)) == ["a.txt"]
+
+
+def test_atomic_writes_get_ordinary_file_modes(tmp_path: Path) -> None:
+    """A new file gets 0o666 less the umask (not a temporary file's private 0o600); an existing file keeps its mode."""
+    import os
+    import stat
+
+    from curved_fold.core.files import atomic_write_text
+
+    old = os.umask(0o022)
+    try:
+        new = atomic_write_text(tmp_path / "new.fold", "{}")
+        assert stat.S_IMODE(new.stat().st_mode) == 0o644
+        kept = tmp_path / "kept.fold"
+        kept.write_text("x")
+        kept.chmod(0o640)
+        atomic_write_text(kept, "{}")
+        assert stat.S_IMODE(kept.stat().st_mode) == 0o640
+    finally:
+        os.umask(old)

@@ -389,14 +389,39 @@ def _split_records(
     )
 
 
+def _one_split_per_place(
+    verts: np.ndarray, edges: np.ndarray, rec_e: np.ndarray, rec_d: np.ndarray, rec_v: np.ndarray, tol: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Of split points that fall within ``tol`` of each other along one edge, keep the one nearest the edge's line.
+
+    Both ends of a segment no longer than ``tol`` can lie within ``tol`` of another segment; splitting that segment
+    at both, at (nearly) the same distance along it, leaves their order to round-off and can make the pieces cross
+    their neighbours. One split per place is what the drawing means.
+    """
+    if len(rec_e) < 2:
+        return rec_e, rec_d, rec_v
+    order = np.lexsort((rec_d, rec_e))
+    rec_e, rec_d, rec_v = rec_e[order], rec_d[order], rec_v[order]
+    a, b = verts[edges[rec_e, 0]], verts[edges[rec_e, 1]]
+    r = b - a
+    off = np.abs(_cross(r, verts[rec_v] - a)) / np.maximum(np.hypot(*r.T), 1e-300)
+    new_place = np.ones(len(rec_e), dtype=bool)
+    new_place[1:] = (rec_e[1:] != rec_e[:-1]) | (rec_d[1:] - rec_d[:-1] >= tol)
+    place = np.cumsum(new_place)
+    best = np.lexsort((off, place))
+    keep = best[np.r_[True, place[best][1:] != place[best][:-1]]]
+    return rec_e[keep], rec_d[keep], rec_v[keep]
+
+
 def _apply_splits(
-    verts: np.ndarray, edges: np.ndarray, rec: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+    verts: np.ndarray, edges: np.ndarray, rec: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], tol: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Split edges at the records; returns (vertices, new edges, index of the original edge for each new edge)."""
     rec_e, rec_d, rec_v, new_pts = rec
     n = len(verts)
     verts = np.concatenate([verts, new_pts]) if len(new_pts) else verts
     rec_v = np.where(rec_v < 0, n + (-1 - rec_v), rec_v)
+    rec_e, rec_d, rec_v = _one_split_per_place(verts, edges, rec_e, rec_d, rec_v, tol)
     m = len(edges)
     stop_e = np.concatenate([np.arange(m), rec_e, np.arange(m)])
     stop_d = np.concatenate([np.full(m, -np.inf), rec_d, np.full(m, np.inf)])
@@ -601,7 +626,7 @@ def discretize(
         rec = _split_records(verts, edges, merge_tolerance)
         if len(rec[0]) == 0:
             break
-        verts, edges, parent = _apply_splits(verts, edges, rec)
+        verts, edges, parent = _apply_splits(verts, edges, rec, merge_tolerance)
         attrs = attrs[parent]
         verts, idx = _merge_points(verts, merge_tolerance)
         edges = idx[edges]

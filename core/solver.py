@@ -137,6 +137,18 @@ class Solver:
         out[self.model.hinge_edge] = np.rad2deg(theta)
         return out
 
+    def start_angles(self, x: np.ndarray, percent: float) -> np.ndarray:
+        """Fold angles (rad per hinge) of positions ``x`` (normalised) without a history: each on the branch
+        (θ + 2πk) nearest its target at ``percent``.
+
+        The measured angle wraps at ±180°; a crease folded past flat (a 180° target slightly overshot) would read as
+        −179° and the solve would unfold it all the way round — for a bistable pattern into its other state. The
+        branch nearest the target is the lowest-energy reading; from the flat sheet it is 0 for every |target| ≤ 180°.
+        """
+        raw = evaluate(self.model, x, None, 0.0, forces=False).theta
+        target = self.model.targets(percent)
+        return raw + 2.0 * np.pi * np.round((target - raw) / (2.0 * np.pi))
+
     def solve(
         self,
         percent: float = 1.0,
@@ -159,7 +171,7 @@ class Solver:
         if x0.shape != model.rest.shape or not np.all(np.isfinite(x0)):
             raise SolverError(f"start positions must be a finite ({model.n_nodes}, 3) array, got shape {x0.shape}")
         if theta_prev is None:
-            theta_prev = evaluate(model, x0, None, 0.0, forces=False).theta
+            theta_prev = self.start_angles(x0, percent)
         if self.method == "faithful":
             v0 = np.zeros_like(x0) if velocities is None else np.asarray(velocities, dtype=np.float64)
             x, v, theta, st = faithful_solve(

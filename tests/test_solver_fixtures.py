@@ -99,3 +99,18 @@ def test_isometric_setting_keeps_strain_below_five_hundredths_of_a_percent():
     s_iso = summary(mesh, iso.positions)["strain_mean_pct"]
     s_normal = summary(mesh, normal.positions)["strain_mean_pct"]
     assert s_iso <= 0.05 and s_iso < 0.1 * s_normal, (s_iso, s_normal)
+
+
+@needs_fixtures
+def test_warm_start_from_positions_alone_keeps_a_crease_folded_past_flat():
+    """curvedPleatSimple at 100 %: its creases end slightly past 180° (measured angles wrap to about −179°). A re-solve
+    from the stored positions, with no angle history (what re-fold and live do), must read them on the branch nearest
+    their targets and stay put — not unfold the long way round into the other stable state."""
+    from curved_fold.core.pipeline import refold_mesh
+
+    mesh = fixture_mesh("curvedPleatSimple.svg")
+    first = Solver(mesh, None, "fast").solve(1.0)
+    assert first.converged and np.nanmax(np.abs(first.fold_angles)) > 180.0
+    again = refold_mesh(mesh, 1.0, start=first.positions)
+    assert again.result.iterations <= 1
+    assert rigid_rms(again.result.positions, first.positions) < 1e-6 * mesh.diagonal

@@ -188,12 +188,16 @@ def angle_defect(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray:
     return out
 
 
-def fold_angle_error(mesh: FoldMesh, positions: np.ndarray, percent: float = 1.0) -> np.ndarray:
-    """Simulated − target·percent fold angle per driven crease edge (degrees), ``nan`` elsewhere."""
-    theta = fold_angles(mesh, positions)
+def fold_angle_error(
+    mesh: FoldMesh, positions: np.ndarray, percent: float = 1.0, fold: np.ndarray | None = None
+) -> np.ndarray:
+    """Simulated − target·percent fold angle per driven crease edge (degrees, in [−180, 180)), ``nan`` elsewhere.
+
+    Angles measured from positions wrap at ±180°: a crease at 179.3° with a −180° target is 0.7° off, not 359.3°."""
+    theta = fold_angles(mesh, positions) if fold is None else fold
     out = np.full(len(mesh.edges), np.nan)
     c = mesh.is_crease()
-    out[c] = theta[c] - mesh.fold_angles[c] * percent
+    out[c] = np.mod(theta[c] - mesh.fold_angles[c] * percent + 180.0, 360.0) - 180.0
     return out
 
 
@@ -215,8 +219,7 @@ def summary(mesh: FoldMesh, positions: np.ndarray, percent: float = 1.0) -> dict
     st = strain(mesh, p)
     warp = warp_angles(mesh, p, theta)
     defect = np.abs(angle_defect(mesh, p))
-    c = mesh.is_crease()
-    err = np.abs(theta[c] - mesh.fold_angles[c] * percent)
+    err = np.abs(fold_angle_error(mesh, p, percent, theta)[mesh.is_crease()])
     return {
         "faces": float(mesh.n_faces),
         "strain_mean_pct": 100.0 * _nanmean(st),

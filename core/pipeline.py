@@ -83,11 +83,17 @@ def make_report(
     }
     # metrics.summary also reports mesh counts (as floats): keep the report's own integer counts
     report.update({k: v for k, v in measure(mesh, result, percent).items() if k not in report})
-    bad = report.get("fold_angle_error_mean_deg", 0.0) > DOES_NOT_FOLD_DEG
-    report["does_not_fold_as_assigned"] = bool(bad)
-    if bad:
+    error = report["fold_angle_error_mean_deg"]
+    hingeless = bool(np.any(mesh.is_crease())) and not np.isfinite(error)
+    report["does_not_fold_as_assigned"] = hingeless or bool(error > DOES_NOT_FOLD_DEG)
+    if hingeless:
         report["does_not_fold_message"] = (
-            f"the creases end {report['fold_angle_error_mean_deg']:.1f}° (mean) away from their targets: the pattern "
+            "no crease has paper on both sides (every M/V crease lies on the edge of the meshed sheet): the pattern "
+            "does not fold as assigned; is the border closed around the creases?"
+        )
+    elif report["does_not_fold_as_assigned"]:
+        report["does_not_fold_message"] = (
+            f"the creases end {error:.1f}° (mean) away from their targets: the pattern "
             "does not fold as assigned with this triangulation (paper Fig. 7); try another mesh type or add facets"
         )
     return report

@@ -137,3 +137,15 @@ def test_warp_per_triangle_is_the_mean_of_its_counted_sides() -> None:
         sides = [per_edge[index[tuple(sorted((tri[k], tri[(k + 1) % 3])))]] for k in range(3)]
         counted = [w for w in sides if np.isfinite(w)]
         assert per_tri[t] == pytest.approx(np.mean(counted) if counted else 0.0)
+
+
+def test_fold_angle_error_wraps_at_180_degrees() -> None:
+    """A mountain folded to −180.7° measures +179.3° (positions wrap at ±180°); against its −180° target it is 0.7°
+    off, not 359.3°."""
+    case = bisector_case(n_segments=12, fold_angle_deg=-180.0)
+    mesh = build_mesh(case.pattern, "ruling")
+    pos = case.folded_positions(-180.7)[: mesh.n_vertices]
+    assert np.allclose(metrics.fold_angles(mesh, pos)[mesh.is_crease()], 179.3)
+    err = metrics.fold_angle_error(mesh, pos)[mesh.is_crease()]
+    assert np.allclose(np.abs(err), 0.7, atol=1e-6)
+    assert metrics.summary(mesh, pos)["fold_angle_error_max_deg"] == pytest.approx(0.7, abs=1e-6)

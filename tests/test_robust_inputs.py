@@ -87,6 +87,10 @@ def test_open_border_warns_with_loose_ends_and_still_folds() -> None:
     warning = next(w for w in p.warnings if "border is not closed" in w)
     assert "2 loose end(s) at (0.000, 0.000), (0.000, -100.000) mm" in warning  # SVG y-down flipped: y = -100
     assert_folds_finite(p, angle=90)
+    # only the closed half is paper, so the crease lies on its edge: said, not a silent flat result
+    report = fold_pattern(p, angle=90).report
+    assert report["does_not_fold_as_assigned"]
+    assert "no crease has paper on both sides" in report["does_not_fold_message"]
 
 
 def test_self_crossing_border_is_an_error() -> None:

@@ -91,7 +91,9 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
         if context.mode != "OBJECT":
             cls.poll_message_set("Switch to Object Mode")
             return False
-        if not _common.curve_objects(context.selected_objects or []):
+        # poll cannot see the operator's options, so a script folding a `collection` with nothing selected must
+        # pass: any crease curve in the file will do; execute() names a missing selection or collection.
+        if not _common.curve_objects(context.selected_objects or []) and not _common.curve_objects(bpy.data.objects):
             cls.poll_message_set("Select crease curve objects (curves with a crease role)")
             return False
         return True

@@ -50,15 +50,16 @@ def square_border(name="Border", w=100.0, h=60.0):
 
 
 def test_fold_with_nothing_selected(clean_scene):
-    """Nothing selected: the Fold operator is unavailable (poll says what to select); the scene is untouched."""
+    """Nothing selected: with no crease curve in the file the Fold operator is unavailable (poll says what to
+    select); with crease curves in the file but none selected it says so by name. The scene is untouched."""
+    assert not bpy.ops.curved_fold.fold.poll()
     curved_pattern()
     bpy.context.view_layer.update()
     for ob in bpy.context.view_layer.objects:
         ob.select_set(False)
     bpy.context.view_layer.objects.active = None
-    assert not bpy.ops.curved_fold.fold.poll()
     before = snapshot()
-    with pytest.raises(RuntimeError, match="poll"):
+    with pytest.raises(RuntimeError, match="no crease curves selected"):
         bpy.ops.curved_fold.fold()
     assert snapshot() == before
 
@@ -71,7 +72,7 @@ def test_empty_source_list_message(extension):
 
 def test_fold_from_an_empty_collection_names_it(clean_scene):
     border, crease = curved_pattern()
-    select_only([border, crease])  # the operator polls on the selection; the collection option overrides it
+    select_only([border, crease])  # the collection option overrides the selection
     coll = bpy.data.collections.new("Empty Creases")
     bpy.context.scene.collection.children.link(coll)
     before = snapshot()

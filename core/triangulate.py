@@ -409,6 +409,11 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
         if (i, j) in segment_of:
             raise PatternError(f"triangulation: pattern edges {segment_of[(i, j)]} and {k} join the same two vertices")
         segment_of[(i, j)] = k
+    if not np.any(pattern.assignments == "B"):
+        raise PatternError(
+            "crease pattern has no border (B) segments: the sheet's outline must be drawn, as a closed curve with the "
+            "role Border (black in SVG), around the creases"
+        )
     if len(pts) < 3 or np.all(np.abs(orient(pts[0], pts[1], pts[2:])) <= 1e-12 * pattern.size**2):
         raise PatternError("triangulation: all pattern vertices lie on one line; there is no sheet to mesh")
 

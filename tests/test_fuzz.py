@@ -38,6 +38,7 @@ TIME_BOUND_S = 60.0
 
 CATALOGUE: dict[str, str] = {
     "border crosses itself": r"the border crosses or touches itself at \(",
+    "no border": r"crease pattern has no border \(B\) segments",
     "no paper": r"triangulation: no paper left: the border does not enclose any region",
     "collinear": r"triangulation: all pattern vertices lie on one line",
     "all segments degenerate": r"crease pattern: every segment is shorter than the merge tolerance",

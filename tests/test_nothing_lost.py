@@ -109,7 +109,7 @@ def _absurd_scale():
     ("build", "message"),
     [
         (_self_crossing, r"border crosses or touches itself .*Bowtie"),
-        (_no_border, r"all pattern vertices lie on one line"),
+        (_no_border, r"crease pattern has no border \(B\) segments"),
         (_degenerate_only, r"no crease curves selected"),  # a zero-length spline is not read as a curve
         (_absurd_scale, r"beyond ±1e\+08 mm"),
     ],

@@ -115,6 +115,7 @@ def shape_errors(inp: AnalyticInput, mesh: FoldMesh, result: FoldResult, percent
     s = summary(mesh, result.positions, percent)
     return {
         "rho_meas": rho_meas,
+        "rho_std": float(np.nanstd(simulated)) if np.any(np.isfinite(simulated)) else float("nan"),
         "rms": rigid_rms(result.positions, inp.exact(mesh, percent * inp.fold_angle_deg)) / diag,
         "rms_shape": rigid_rms(result.positions, inp.exact(mesh, rho_meas)) / diag,
         "strain_pct": s["strain_mean_pct"],

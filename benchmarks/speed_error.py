@@ -312,11 +312,15 @@ def plot(sweep: dict[str, Any], img_dir: Path = IMG) -> list[str]:
                 r["total_ms"],
                 max(r["rms"], 1e-9),
                 s=size,
-                c=MESH_COLOURS[r["mesh"]],
+                facecolors=MESH_COLOURS[r["mesh"]] if r["converged"] else "none",
                 marker=SOLVER_MARKERS[r["solver"]],
                 alpha=0.85 if r["sweep"] == "interval" else 0.45,
-                edgecolors="k" if r["sweep"] == "interval" else "none",
-                linewidths=0.4,
+                edgecolors=MESH_COLOURS[r["mesh"]]
+                if not r["converged"]
+                else "k"
+                if r["sweep"] == "interval"
+                else "none",
+                linewidths=0.4 if r["converged"] else 1.2,
             )
         for traj in sweep["trajectories"]:
             if traj[0]["case"] != case:
@@ -343,7 +347,10 @@ def plot(sweep: dict[str, Any], img_dir: Path = IMG) -> list[str]:
         Line2D([], [], ls="--", color="k", label="Pareto front"),
     ]
     fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=8, frameon=False)
-    fig.suptitle("Speed against error (marker size: finer interval = larger; pale: tolerance sweep at 7 mm)")
+    fig.suptitle(
+        "Speed against error (marker size: finer interval = larger; pale: tolerance sweep at 7 mm; "
+        "hollow: hit its iteration cap)"
+    )
     fig.tight_layout(rect=(0, 0.06, 1, 1))
     p = img_dir / "bench_speed_error.png"
     fig.savefig(p, dpi=110)

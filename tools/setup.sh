@@ -4,7 +4,7 @@
 # * Debian libraries the bpy wheel links against (X11/EGL/GL; Mesa for Workbench software GL) — installed only if
 #   missing, with apt-get when running as root, otherwise a clear message saying what to run.
 # * .venv      : Python 3.11 + bpy 5.0.1 + triangle + numpy + pytest + hypothesis + matplotlib + ruff
-# * .venv-4.5  : Python 3.11 + bpy 4.5.15 (the LTS, for compatibility runs) + triangle + numpy + pytest + hypothesis
+# * .venv-4.5  : Python 3.11 + bpy 4.5.15 (the LTS) + triangle + numpy + pytest + hypothesis + matplotlib (bench smoke test)
 # * in each venv, `import curved_fold` works: the repository root IS the package, whatever the clone's folder is
 #   called, so <venv>/links/curved_fold is a symlink to the root and a .pth file puts <venv>/links on sys.path.
 set -euo pipefail
@@ -14,7 +14,7 @@ PYTHON="${PYTHON:-}"
 
 APT_PACKAGES=(libx11-6 libxi6 libxfixes3 libxrender1 libxkbcommon0 libsm6 libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri)
 MAIN_REQUIREMENTS=(bpy==5.0.1 numpy==1.26.4 triangle==20250106 pytest hypothesis matplotlib ruff)
-LTS_REQUIREMENTS=(bpy==4.5.15 numpy==1.26.4 triangle==20250106 pytest hypothesis)
+LTS_REQUIREMENTS=(bpy==4.5.15 numpy==1.26.4 triangle==20250106 pytest hypothesis matplotlib)
 
 say() { printf 'setup: %s\n' "$*"; }
 

@@ -410,8 +410,13 @@ def render(report: dict[str, Any]) -> str:
         "Machine and versions:",
         "",
         *machine_lines(info),
-        f"- load average at the end (1/5/15 min): {' / '.join(f'{x:.2f}' for x in report['load_end'])} — the 2 cores "
-        "were shared with other jobs, so wall times are noisy (repeats below give their spread).",
+        f"- load average at the end (1/5/15 min): {' / '.join(f'{x:.2f}' for x in report['load_end'])} — "
+        + (
+            "the machine was nearly idle (below 2 = the 2 cores)"
+            if max(report["load_end"][0], info["load"][0]) < 2.0
+            else "the 2 cores were shared with other jobs, so wall times are noisy"
+        )
+        + "; the repeats below give the spread of the timings.",
         "",
         "Settings: Origami Simulator's material (axial 20, crease 0.7, panel 0.7, face 0.2, damping 0.45), the shared "
         "scale-free residual criterion 1e-6 (docs/solver.md), ruling mesh unless stated. Fixtures fold at "

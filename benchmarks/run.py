@@ -503,8 +503,8 @@ def render(report: dict[str, Any]) -> str:
             f"`{sc_row['pattern']}`): {sc_row['faces']} vs {p[1]} faces; generation {sc_row['gen_ms']:.0f} vs "
             f"{p[2]} ms; simulation {sc_row['fast_ms']:.0f} vs {p[3]} ms; strain {sc_row['strain_pct']:.3f} vs "
             f"{p[4]:.2f} %; warp {sc_row['warp_without']:.2f}° → {sc_row['warp_with']:.2f}° vs {p[5]}° → {p[6]}°. "
-            "Different drawings (our crease is an S, the paper's a single arc), so the warp figures compare in "
-            "trend, not value."
+            "Different drawings (ours is one bow-shaped cubic Bézier; the paper's curve is not given exactly), so "
+            "the warp figures compare in trend, not value."
         )
     lines += [
         "",

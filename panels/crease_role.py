@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import bpy
 
+from ._sidebar import SidebarPanel
 
-class VIEW3D_PT_curved_fold_crease_role(bpy.types.Panel):
+
+class VIEW3D_PT_curved_fold_crease_role(SidebarPanel, bpy.types.Panel):
     """Crease role and fold angle of the active curve object"""
 
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Curved Fold"
     bl_label = "Crease Role"
     bl_order = 10
 

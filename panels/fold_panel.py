@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import bpy
 
+from ._sidebar import SidebarPanel
+
 
 def _fold_props(context):
     ob = context.active_object
@@ -13,12 +15,9 @@ def _fold_props(context):
     return props if props is not None and props.is_fold_mesh else None
 
 
-class VIEW3D_PT_curved_fold_fold(bpy.types.Panel):
+class VIEW3D_PT_curved_fold_fold(SidebarPanel, bpy.types.Panel):
     """Fold the selected crease curves"""
 
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Curved Fold"
     bl_label = "Fold"
     bl_order = 0
 
@@ -34,12 +33,9 @@ class VIEW3D_PT_curved_fold_fold(bpy.types.Panel):
         layout.operator("curved_fold.import_pattern", icon="IMPORT")
 
 
-class VIEW3D_PT_curved_fold_mesh(bpy.types.Panel):
+class VIEW3D_PT_curved_fold_mesh(SidebarPanel, bpy.types.Panel):
     """Settings and figures of the active folded mesh"""
 
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Curved Fold"
     bl_label = "Folded Mesh"
     bl_order = 0
 
@@ -70,10 +66,7 @@ class VIEW3D_PT_curved_fold_mesh(bpy.types.Panel):
                 box.label(text=props.last_message[i : i + 60], icon="ERROR" if i == 0 else "BLANK1")
 
 
-class VIEW3D_PT_curved_fold_pattern(bpy.types.Panel):
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Curved Fold"
+class VIEW3D_PT_curved_fold_pattern(SidebarPanel, bpy.types.Panel):
     bl_label = "Pattern"
     bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
     bl_options = {"DEFAULT_CLOSED"}
@@ -90,10 +83,7 @@ class VIEW3D_PT_curved_fold_pattern(bpy.types.Panel):
         layout.label(text=f"{len(props.sources)} source curve(s)")
 
 
-class VIEW3D_PT_curved_fold_solver(bpy.types.Panel):
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Curved Fold"
+class VIEW3D_PT_curved_fold_solver(SidebarPanel, bpy.types.Panel):
     bl_label = "Solver"
     bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
     bl_options = {"DEFAULT_CLOSED"}
@@ -110,10 +100,7 @@ class VIEW3D_PT_curved_fold_solver(bpy.types.Panel):
             col.prop(props, name)
 
 
-class VIEW3D_PT_curved_fold_animation(bpy.types.Panel):
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Curved Fold"
+class VIEW3D_PT_curved_fold_animation(SidebarPanel, bpy.types.Panel):
     bl_label = "Animation & Export"
     bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
 
@@ -141,10 +128,7 @@ class VIEW3D_PT_curved_fold_animation(bpy.types.Panel):
         row.operator("curved_fold.export_pattern_svg", text="Export SVG", icon="FILE_IMAGE")
 
 
-class VIEW3D_PT_curved_fold_figures(bpy.types.Panel):
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Curved Fold"
+class VIEW3D_PT_curved_fold_figures(SidebarPanel, bpy.types.Panel):
     bl_label = "Last Run"
     bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
 

@@ -46,7 +46,7 @@ MERGE_PER_150 = 0.05
 """Default merge tolerance for a 150 mm sheet, mm (the paper used Origami Simulator's 1.0 mm).
 
 1.0 mm per 150 mm would collapse genuine segments of the dense fixtures. Shortest drawn segments measured in
-``/work/shared/fixtures/origami-simulator``, scaled to a 150 mm sheet (sheet size as :func:`sheet_size`):
+``../shared/fixtures/origami-simulator``, scaled to a 150 mm sheet (sheet size as :func:`sheet_size`):
 ``shell14`` 0.063 mm (ruling rungs at the panel tips), ``huffmanTower`` 0.104 mm (facet fans), ``Carved_Cylinder``
 0.83 mm, ``Treble_Clef`` 1.53 mm, ``CircularPleat-antiFacet`` 1.88 mm (border ring chords), ``miura-ori`` 10 mm.
 Our own curve chords go down to ≈ sqrt(8·tolerance·radius) (0.3 mm on a 0.2 mm-radius bend at the default

@@ -26,7 +26,7 @@ Blender-level tests ask for two fixtures::
 * ``extension_zip`` (session): the path of the licence-clean zip the session built.
 * ``view3d`` (function, implies ``clean_scene``): ``window/screen/area/region`` of the 3D viewport for
   ``bpy.context.temp_override(**view3d)`` — for operators and panels that need a 3D viewport context.
-* ``fixtures_dir`` (session): ``/work/shared/fixtures`` (skips when absent).
+* ``fixtures_dir`` (session): ``../shared/fixtures`` (beside the repository) (skips when absent).
 * ``ext_module(extension, "scene.curves")`` (plain function, ``from .conftest import ext_module``): import a module
   of the installed copy.
 
@@ -156,7 +156,7 @@ def ext_module(extension: ModuleType, name: str) -> ModuleType:
 
 @pytest.fixture(scope="session")
 def fixtures_dir() -> Path:
-    """``/work/shared/fixtures`` (shared, never copied into the repo); skips when it is absent."""
+    """``../shared/fixtures`` (beside the repository) (shared, never copied into the repo); skips when it is absent."""
     if not FIXTURES.is_dir():
         pytest.skip(f"shared fixtures folder {FIXTURES} is absent")
     return FIXTURES

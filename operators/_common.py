@@ -52,6 +52,15 @@ def engine_errors() -> tuple[type[BaseException], ...]:
     return tuple(errors)
 
 
+def poll_fold_object(cls, context, *, object_mode: bool = True) -> bool:
+    """Operator poll: the active object is a folded mesh (and, with ``object_mode``, Blender is in Object Mode)."""
+    ob = context.active_object
+    if ob is None or not ob.curved_fold_mesh.is_fold_mesh:
+        cls.poll_message_set("The active object is not a folded mesh (use Fold Crease Pattern first)")
+        return False
+    return context.mode == "OBJECT" or not object_mode
+
+
 def curve_objects(objects) -> list[bpy.types.Object]:
     """The curve objects among ``objects`` that carry a crease role (others, e.g. crease-display curves, are not)."""
     out = []

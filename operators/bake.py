@@ -130,14 +130,6 @@ class BakeJob:
         return text
 
 
-def _poll_fold_object(cls, context) -> bool:
-    ob = context.active_object
-    if ob is None or not getattr(ob, "curved_fold_mesh", None) or not ob.curved_fold_mesh.is_fold_mesh:
-        cls.poll_message_set("The active object is not a folded mesh (use Fold Crease Pattern first)")
-        return False
-    return context.mode == "OBJECT"
-
-
 class CURVED_FOLD_OT_bake(bpy.types.Operator):
     """Bake the fold over the scene's frame range to shape keys"""
 
@@ -154,7 +146,7 @@ class CURVED_FOLD_OT_bake(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return _poll_fold_object(cls, context)
+        return _common.poll_fold_object(cls, context)
 
     def _new_job(self, context) -> BakeJob:
         scene = context.scene
@@ -248,7 +240,7 @@ class CURVED_FOLD_OT_clear_bake(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return _poll_fold_object(cls, context) and bool(bake.baked_frames(context.active_object))
+        return _common.poll_fold_object(cls, context) and bool(bake.baked_frames(context.active_object))
 
     def execute(self, context):
         ob = context.active_object

@@ -6,6 +6,8 @@ from __future__ import annotations
 import bpy
 from bpy.props import EnumProperty
 
+from . import _common
+
 ATTRIBUTES = {"STRAIN": "cf_strain", "WARP": "cf_warp"}
 
 
@@ -52,8 +54,7 @@ class CURVED_FOLD_OT_show_colours(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        ob = context.active_object
-        return ob is not None and ob.type == "MESH" and ob.curved_fold_mesh.is_fold_mesh
+        return _common.poll_fold_object(cls, context, object_mode=False)
 
     def execute(self, context):
         ob = context.active_object

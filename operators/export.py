@@ -68,11 +68,7 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
 
     @classmethod
     def poll(cls, context):
-        ob = context.active_object
-        if ob is None or not ob.curved_fold_mesh.is_fold_mesh:
-            cls.poll_message_set("The active object is not a folded mesh")
-            return False
-        return True
+        return _common.poll_fold_object(cls, context, object_mode=False)
 
     def check(self, context):
         path = Path(self.filepath)

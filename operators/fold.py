@@ -186,11 +186,7 @@ class CURVED_FOLD_OT_refold(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        ob = context.active_object
-        if ob is None or not ob.curved_fold_mesh.is_fold_mesh:
-            cls.poll_message_set("The active object is not a folded mesh")
-            return False
-        return context.mode == "OBJECT"
+        return _common.poll_fold_object(cls, context)
 
     def execute(self, context):
         ob = context.active_object

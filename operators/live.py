@@ -134,8 +134,7 @@ class CURVED_FOLD_OT_toggle_live(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        ob = context.active_object
-        return ob is not None and ob.curved_fold_mesh.is_fold_mesh
+        return _common.poll_fold_object(cls, context, object_mode=False)
 
     def execute(self, context):
         props = context.active_object.curved_fold_mesh

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-FIXTURES = REPO.parent / "shared" / "fixtures" / "origami-simulator"
+FIXTURES = REPO / "tests" / "fixtures" / "origami-simulator"
 EXAMPLES = REPO / "examples"
 DOCS = REPO / "docs"
 IMG = DOCS / "img"

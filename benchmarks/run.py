@@ -32,11 +32,11 @@ if __package__ in (None, ""):  # run as a script: make the add-on importable as 
 
 import bpy  # noqa: E402,F401 - bmesh (ruling swaps) needs bpy imported first
 
-from curved_fold.core.meshing import build_mesh  # noqa: E402
-from curved_fold.core.metrics import summary  # noqa: E402
-from curved_fold.core.pattern import CreasePattern  # noqa: E402
-from curved_fold.core.reader import read_pattern  # noqa: E402
-from curved_fold.core.solver import Solver, SolverSettings, rigid_rms  # noqa: E402
+from curved_fold.core.io.reader import read_pattern  # noqa: E402
+from curved_fold.core.mesh.build import build_mesh  # noqa: E402
+from curved_fold.core.metrics.measures import summary  # noqa: E402
+from curved_fold.core.pattern.model import CreasePattern  # noqa: E402
+from curved_fold.core.solve.solver import Solver, SolverSettings, rigid_rms  # noqa: E402
 
 from . import scaling as scaling_mod  # noqa: E402
 from . import speed_error  # noqa: E402
@@ -737,7 +737,7 @@ def main(argv: list[str] | None = None) -> int:
     report["load_end"] = load_average()
     report["seconds"] = budget.elapsed
     doc = Path(args.doc)
-    from curved_fold.core.files import atomic_write_text
+    from curved_fold.core.io.atomic import atomic_write_text
 
     atomic_write_text(doc, render(report))
     out = Path(args.out)

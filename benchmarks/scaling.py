@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from curved_fold.core.discretize import discretize
-from curved_fold.core.meshing import build_mesh
-from curved_fold.core.pattern import CreaseCurve, CreasePattern, CurveSegment
-from curved_fold.core.solver import Solver, SolverSettings
+from curved_fold.core.mesh.build import build_mesh
+from curved_fold.core.pattern.discretize import discretize
+from curved_fold.core.pattern.model import CreaseCurve, CreasePattern, CurveSegment
+from curved_fold.core.solve.solver import Solver, SolverSettings
 
 from .common import IMG, fit_exponent, peak_memory
 

@@ -26,13 +26,13 @@ if __package__ in (None, ""):  # run as a script: make the add-on importable as 
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
     __package__ = "curved_fold.benchmarks"
 
-from curved_fold.core.meshing import build_mesh  # noqa: E402
-from curved_fold.core.pattern import CreasePattern  # noqa: E402
-from curved_fold.core.reader import read_pattern  # noqa: E402
-from curved_fold.core.solver import Solver, SolverSettings, rigid_rms  # noqa: E402
+from curved_fold.core.io.reader import read_pattern  # noqa: E402
+from curved_fold.core.mesh.build import build_mesh  # noqa: E402
+from curved_fold.core.pattern.model import CreasePattern  # noqa: E402
+from curved_fold.core.solve.solver import Solver, SolverSettings, rigid_rms  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
-FIXTURES = REPO.parent / "shared" / "fixtures" / "origami-simulator"
+FIXTURES = REPO / "tests" / "fixtures" / "origami-simulator"
 EXAMPLES = REPO / "examples"
 DOC = REPO / "docs" / "solver.md"
 BEGIN, END = "<!-- BEGIN GENERATED: benchmarks/solvers.py -->", "<!-- END GENERATED: benchmarks/solvers.py -->"
@@ -42,7 +42,7 @@ BIG = ("shell14.svg", "CircularPleat-antiFacet.svg", "huffmanTower.svg", "Rotati
 
 
 def _strain_mean_pct(mesh, positions: np.ndarray) -> float:
-    from curved_fold.core.metrics import summary
+    from curved_fold.core.metrics.measures import summary
 
     return float(summary(mesh, positions)["strain_mean_pct"])
 
@@ -149,8 +149,8 @@ def cases(quick: bool = False) -> list[tuple[Path, float, float]]:
 def run_frames(cells: int = 32, frames: int = 60) -> dict[str, Any]:
     """Quasi-static animation on a ``cells × cells`` grid (2·cells² faces) with a straight 120° valley, fold percent
     stepping by 1/``frames`` per frame: median/max wall ms per frame, CPU ms, Newton iterations, factorisations."""
-    from curved_fold.core.animation import FoldAnimation
-    from curved_fold.core.model import mesh_from_triangles
+    from curved_fold.core.solve.animation import FoldAnimation
+    from curved_fold.core.solve.model import mesh_from_triangles
 
     n = cells
     g = np.array([[i, j] for j in range(n + 1) for i in range(n + 1)], float) * 200.0 / n
@@ -306,7 +306,7 @@ def write_docs(rows: list[dict[str, Any]], lines: list[str] | None = None, path:
         text = text[: text.index(BEGIN)] + body + text[text.index(END) + len(END) :]
     else:
         text = text.rstrip() + "\n\n" + body + "\n"
-    from curved_fold.core.files import atomic_write_text
+    from curved_fold.core.io.atomic import atomic_write_text
 
     atomic_write_text(path, text)
 

@@ -27,11 +27,11 @@ from typing import Any
 
 import numpy as np
 
-from curved_fold.core.mesh import FoldMesh
-from curved_fold.core.meshing import build_mesh
-from curved_fold.core.metrics import summary
-from curved_fold.core.pattern import CreasePattern
-from curved_fold.core.solver import FoldResult, Solver, SolverSettings, rigid_rms
+from curved_fold.core.mesh.build import build_mesh
+from curved_fold.core.mesh.fold_mesh import FoldMesh
+from curved_fold.core.metrics.measures import summary
+from curved_fold.core.pattern.model import CreasePattern
+from curved_fold.core.solve.solver import FoldResult, Solver, SolverSettings, rigid_rms
 from curved_fold.tests.analytic import annular_sector, bisector_case, parabola_strip
 
 from .common import IMG, pareto_mask

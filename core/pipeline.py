@@ -13,9 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from .mesh import FoldMesh
-from .pattern import CreasePattern, PatternError
-from .solver import FoldResult, Solver, SolverSettings
+from .mesh.fold_mesh import FoldMesh
+from .pattern.model import CreasePattern, PatternError
+from .solve.solver import FoldResult, Solver, SolverSettings
 
 DOES_NOT_FOLD_DEG = 15.0
 """Mean |simulated − target| crease angle (degrees) above which the report flags "does not fold as assigned"."""
@@ -45,7 +45,7 @@ def _with_angle(pattern: CreasePattern, angle: float | None) -> CreasePattern:
 
 def measure(mesh: FoldMesh, result: FoldResult, percent: float) -> dict[str, Any]:
     """Strain, warp, angle defect (``core.metrics.summary``) and the fold-angle error of the solver's own angles."""
-    from . import metrics
+    from .metrics import measures as metrics
 
     out: dict[str, Any] = dict(metrics.summary(mesh, result.positions, percent=percent))
     crease = mesh.is_crease()
@@ -127,7 +127,7 @@ def fold_pattern(
 
     ``angle`` (degrees) is the target of every M/V crease without one (valley +, mountain −).
     """
-    from .meshing import build_mesh
+    from .mesh.build import build_mesh
 
     pattern = _with_angle(pattern, angle)
     mesh = build_mesh(pattern, mesh_type=mesh_type, backend=backend)

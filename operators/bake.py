@@ -16,7 +16,7 @@ import time
 import bpy
 import numpy as np
 
-from ..scene import bake, mesh_object
+from ..scene import bake, folding, mesh_object
 from . import _common
 
 TICK_BUDGET_S = 0.03
@@ -48,7 +48,7 @@ class _WarmStartStepper:
     """Per-frame solves warm-started from the previous frame, used when ``core.animation`` is not available."""
 
     def __init__(self, mesh, settings, method: str):
-        from ..core.solver import Solver
+        from ..core.solve.solver import Solver
 
         self.solver = Solver(mesh, settings, method)
         self.previous = None
@@ -62,9 +62,9 @@ class _WarmStartStepper:
 def make_stepper(mesh, props):
     """``core.animation.FoldAnimation`` for ``mesh`` with the object's mode/steps/stiffness (or a warm-start
     fallback while that module is missing)."""
-    settings = _common.solver_settings(props)
+    settings = folding.solver_settings(props)
     try:
-        from ..core.animation import FoldAnimation
+        from ..core.solve.animation import FoldAnimation
     except ImportError:
         return _WarmStartStepper(mesh, settings, props.solver)
     mode = "dynamic" if props.solver_mode == "DYNAMIC" else "quasi_static"
@@ -117,7 +117,7 @@ class BakeJob:
         ob = bpy.data.objects[self.ob_name]
         bake.bake_shape_keys(ob, self.frames, self.positions, scene=scene)
         ob.curved_fold_mesh.baked_frames = len(self.frames)
-        strain_pct, warp_deg = _common.display_metrics(self.mesh, self.positions[-1])
+        strain_pct, warp_deg = folding.display_metrics(self.mesh, self.positions[-1])
         me = ob.data
         mesh_object.write_colours(me, "cf_strain", strain_pct, mesh_object.STRAIN_CLIP_PCT)
         mesh_object.write_colours(me, "cf_warp", warp_deg, mesh_object.WARP_CLIP_DEG)
@@ -157,7 +157,7 @@ class CURVED_FOLD_OT_bake(bpy.types.Operator):
             job = self._new_job(context)
             job.step()
             job.write(context.scene)
-        except _common.engine_errors() as exc:
+        except folding.engine_errors() as exc:
             self.report({"ERROR"}, f"Bake of '{context.active_object.name}' failed: {exc}")
             return {"CANCELLED"}
         self.report({"INFO"}, f"'{job.ob_name}': {job.summary()}")
@@ -168,7 +168,7 @@ class CURVED_FOLD_OT_bake(bpy.types.Operator):
             return self.execute(context)
         try:
             self._job = self._new_job(context)
-        except _common.engine_errors() as exc:
+        except folding.engine_errors() as exc:
             self.report({"ERROR"}, f"Bake of '{context.active_object.name}' failed: {exc}")
             return {"CANCELLED"}
         wm = context.window_manager
@@ -217,7 +217,7 @@ class CURVED_FOLD_OT_bake(bpy.types.Operator):
             if not self._job.done:
                 return {"RUNNING_MODAL"}
             self._job.write(context.scene)
-        except _common.engine_errors() as exc:
+        except folding.engine_errors() as exc:
             self._finish(context)
             self.report({"ERROR"}, f"Bake of '{self._job.ob_name}' failed: {exc}")
             return {"CANCELLED"}

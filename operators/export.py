@@ -12,7 +12,7 @@ import numpy as np
 from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from ..scene import bake, export, mesh_object
+from ..scene import bake, export, folding, mesh_object
 from . import _common
 
 FORMATS = (
@@ -89,13 +89,13 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
             if suffix in (".obj", ".stl"):
                 positions = [current_frame_positions(ob, context)]
             elif suffix == ".fold":
-                from ..core import metrics
+                from ..core.metrics import measures as metrics
 
                 kwargs = {"fold_angles": [metrics.fold_angles(mesh, p) for p in positions]}
             else:
                 kwargs["frame_numbers"] = frames or None
             path = export.export_folded_file(self.filepath, mesh, positions, **kwargs)
-        except (*_common.engine_errors(), OSError, ImportError) as exc:
+        except (*folding.engine_errors(), OSError, ImportError) as exc:
             self.report({"ERROR"}, f"Export of '{ob.name}' failed: {exc}")
             return {"CANCELLED"}
         self.report({"INFO"}, f"Exported '{ob.name}' ({len(positions)} frame(s)) to {path}")
@@ -124,7 +124,7 @@ class CURVED_FOLD_OT_export_pattern_svg(bpy.types.Operator, ExportHelper):
         ob = context.active_object
         try:
             path = export.write_pattern_svg(self.filepath, mesh_object.read_fold_mesh(ob))
-        except (*_common.engine_errors(), OSError) as exc:
+        except (*folding.engine_errors(), OSError) as exc:
             self.report({"ERROR"}, f"SVG export of '{ob.name}' failed: {exc}")
             return {"CANCELLED"}
         self.report({"INFO"}, f"Wrote the crease pattern of '{ob.name}' to {path}")

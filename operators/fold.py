@@ -6,50 +6,9 @@ import bpy
 import numpy as np
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
 
-from ..scene import bake, mesh_object
+from ..scene import folding, mesh_object
 from ..scene.fold_settings import MESH_TYPES
 from . import _common
-
-
-def refold(
-    ob: bpy.types.Object,
-    *,
-    rebuild: bool | None = None,
-    scene=None,
-    max_iterations: int | None = None,
-    warm_start: bool = False,
-) -> _common.FoldOutcome:
-    """Re-fold the fold object ``ob``: rebuild the mesh from its source curves (when it has sources and ``rebuild``
-    is not False) or re-solve its stored mesh, then write the result. Any bake is cleared (it would be stale).
-
-    ``warm_start`` starts a re-solve from the current shape instead of the flat sheet (live edits of the fold
-    percent). Everything is computed before anything is written; raises the engine's errors unchanged.
-    """
-    props = ob.curved_fold_mesh
-    sources = _common.source_objects(ob)
-    if rebuild is None:
-        rebuild = bool(sources)
-    if rebuild:
-        if not sources:
-            raise _common.PatternError(f"'{ob.name}' has no source crease curves left to rebuild from")
-        pattern = _common.pattern_from_objects(sources, interval=props.interval, tolerance=props.tolerance)
-        out = _common.fold_from_pattern(pattern, props, max_iterations=max_iterations)
-    else:
-        start = None
-        if warm_start:
-            co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
-            ob.data.attributes["position"].data.foreach_get("vector", co)
-            start = co.reshape(-1, 3).astype(np.float64) * mesh_object.mm_per_unit(scene)
-        out = _common.resolve_stored(ob, max_iterations=max_iterations, start=start)
-    bake.clear_bake(ob)
-    props.baked_frames = 0
-    results = {"fold_angles_sim": out.fold_angles, "strain_pct": out.strain_pct, "warp_deg": out.warp_deg}
-    if rebuild:
-        mesh_object.replace_fold_mesh(ob, out.mesh, out.positions, scene=scene, **results)
-    else:
-        mesh_object.write_results(ob, out.mesh, out.positions, scene=scene, **results)
-    _common.store_figures(ob, out)
-    return out
 
 
 class CURVED_FOLD_OT_fold(bpy.types.Operator):
@@ -93,7 +52,7 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
             return False
         # poll cannot see the operator's options, so a script folding a `collection` with nothing selected must
         # pass: any crease curve in the file will do; execute() names a missing selection or collection.
-        if not _common.curve_objects(context.selected_objects or []) and not _common.curve_objects(bpy.data.objects):
+        if not folding.curve_objects(context.selected_objects or []) and not folding.curve_objects(bpy.data.objects):
             cls.poll_message_set("Select crease curve objects (curves with a crease role)")
             return False
         return True
@@ -102,15 +61,15 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
         if self.collection:
             coll = bpy.data.collections.get(self.collection)
             if coll is None:
-                raise _common.PatternError(f"no collection named '{self.collection}'")
-            return coll, _common.curve_objects(coll.all_objects)
-        return None, _common.curve_objects(context.selected_objects or [])
+                raise folding.PatternError(f"no collection named '{self.collection}'")
+            return coll, folding.curve_objects(coll.all_objects)
+        return None, folding.curve_objects(context.selected_objects or [])
 
     def execute(self, context):
         try:
             coll, sources = self._sources(context)
-            pattern = _common.pattern_from_objects(sources, interval=self.interval, tolerance=self.tolerance)
-            out = _common.fold_from_pattern(
+            pattern = folding.pattern_from_objects(sources, interval=self.interval, tolerance=self.tolerance)
+            out = folding.fold_from_pattern(
                 pattern,
                 None,
                 percent=self.fold_percent / 100.0,
@@ -118,7 +77,7 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
                 mesh_type=self.mesh_type,
                 solver=self.solver,
             )
-        except _common.engine_errors() as exc:
+        except folding.engine_errors() as exc:
             self.report({"ERROR"}, f"Fold failed: {exc}")
             return {"CANCELLED"}
         target = sources[0].users_collection[0] if sources[0].users_collection else context.scene.collection
@@ -145,7 +104,7 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
             props.interval, props.tolerance, props.mesh_type = self.interval, self.tolerance, self.mesh_type
             props.use_fold_angle, props.fold_angle = self.use_fold_angle, self.fold_angle
             props.fold_percent, props.solver = self.fold_percent, self.solver
-            _common.store_figures(ob, out)
+            folding.store_figures(ob, out)
         except Exception as exc:  # any write failure: remove what was made, report, leave the scene as it was
             mesh_object.remove_fold_object(ob)
             self.report({"ERROR"}, f"Fold failed while writing the mesh: {exc}")
@@ -159,7 +118,7 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
         props = ob.curved_fold_mesh
         if props.last_message:
             self.report({"WARNING"}, f"'{ob.name}' {props.last_message}")
-        self.report({"INFO"}, f"Folded '{ob.name}': {_common.figures_text(props)}")
+        self.report({"INFO"}, f"Folded '{ob.name}': {folding.figures_text(props)}")
         return {"FINISHED"}
 
 
@@ -192,14 +151,14 @@ class CURVED_FOLD_OT_refold(bpy.types.Operator):
         ob = context.active_object
         rebuild = {"AUTO": None, "REBUILD": True, "RESOLVE": False}[self.rebuild]
         try:
-            refold(ob, rebuild=rebuild, scene=context.scene)
-        except _common.engine_errors() as exc:
+            folding.refold(ob, rebuild=rebuild, scene=context.scene)
+        except folding.engine_errors() as exc:
             self.report({"ERROR"}, f"Re-fold of '{ob.name}' failed: {exc}")
             return {"CANCELLED"}
         props = ob.curved_fold_mesh
         if props.last_message:
             self.report({"WARNING"}, f"'{ob.name}' {props.last_message}")
-        self.report({"INFO"}, f"Re-folded '{ob.name}': {_common.figures_text(props)}")
+        self.report({"INFO"}, f"Re-folded '{ob.name}': {folding.figures_text(props)}")
         return {"FINISHED"}
 
 

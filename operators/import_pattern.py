@@ -7,8 +7,7 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-from ..scene import import_curves
-from . import _common
+from ..scene import folding, import_curves
 
 
 class CURVED_FOLD_OT_import_pattern(bpy.types.Operator, ImportHelper):
@@ -28,7 +27,7 @@ class CURVED_FOLD_OT_import_pattern(bpy.types.Operator, ImportHelper):
     def execute(self, context):
         try:
             objects, warnings = import_curves.import_crease_pattern(self.filepath, scene=context.scene)
-        except (*_common.engine_errors(), OSError) as exc:
+        except (*folding.engine_errors(), OSError) as exc:
             self.report({"ERROR"}, f"Import failed: {exc}")
             return {"CANCELLED"}
         for other in context.selected_objects:

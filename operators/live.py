@@ -1,127 +1,10 @@
-"""Live re-fold: while a folded mesh's Live toggle is on, editing one of its crease curves (or its settings)
-re-folds it — the paper's future work, "interactive editing of the crease pattern".
-
-How it stays responsive:
-
-* a persistent ``depsgraph_update_post`` handler only *detects*: it maps updated curve objects/data to the live
-  fold objects that use them (:func:`fold_objects_to_refold`) and calls :func:`schedule_refold`;
-* :func:`schedule_refold` debounces: it records the object and (re)arms one ``bpy.app.timers`` callback
-  :data:`DEBOUNCE_S` after the last edit, so dragging a handle does not queue a fold per mouse move;
-* :func:`run_pending` (the timer body, a plain function tests call directly: timers never fire headless) re-folds
-  each pending object once, with the solver's iteration cap lowered (:data:`LIVE_MAX_ITERATIONS`), and catches
-  errors into the object's message.
-
-The handler ignores the fold objects' own updates (their meshes and crease-display curves), so a re-fold does not
-trigger another.
-"""
+"""The Live toggle of a folded mesh; the live re-fold itself (detect, debounce, re-fold) is :mod:`..scene.live`."""
 
 from __future__ import annotations
 
-import time
-
 import bpy
-from bpy.app.handlers import persistent
 
 from . import _common
-
-DEBOUNCE_S = 0.25
-"""Quiet time after the last edit before a live re-fold runs."""
-
-LIVE_MAX_ITERATIONS = 40
-"""Iteration cap of the fast solver during live re-folds (bounded work per edit)."""
-
-_pending: dict[str, tuple[float, bool]] = {}
-"""Fold objects waiting for a live re-fold: name → (time of the last request, whether the mesh must be rebuilt)."""
-_guard = {"running": False}
-
-
-def live_fold_objects(scene: bpy.types.Scene | None = None) -> list[bpy.types.Object]:
-    """Fold objects (in ``scene``, or everywhere) whose Live toggle is on."""
-    obs = scene.objects if scene is not None else bpy.data.objects
-    return [
-        ob
-        for ob in obs
-        if getattr(ob, "curved_fold_mesh", None) is not None
-        and ob.curved_fold_mesh.is_fold_mesh
-        and ob.curved_fold_mesh.live
-    ]
-
-
-def fold_objects_to_refold(updated_ids, scene: bpy.types.Scene | None = None) -> list[str]:
-    """Names of live fold objects that use any of ``updated_ids`` (curve objects or their curve data) as source."""
-    names = set()
-    for id_ in updated_ids:
-        if isinstance(id_, bpy.types.Object) and id_.type == "CURVE":
-            names.add(("OB", id_.name))
-            names.add(("CU", id_.data.name))
-        elif isinstance(id_, bpy.types.Curve):
-            names.add(("CU", id_.name))
-    if not names:
-        return []
-    out = []
-    for ob in live_fold_objects(scene):
-        for src in _common.source_objects(ob):
-            if ("OB", src.name) in names or ("CU", src.data.name) in names:
-                out.append(ob.name)
-                break
-    return out
-
-
-def schedule_refold(name: str, *, rebuild: bool = True) -> None:
-    """Ask for a re-fold of the fold object ``name`` after :data:`DEBOUNCE_S` of quiet (debounced).
-
-    ``rebuild=False`` (fold percent, solver changes) only re-solves the stored mesh, warm-started from the current
-    shape; a pending rebuild is never downgraded."""
-    if _guard["running"]:
-        return
-    _pending[name] = (time.monotonic(), rebuild or _pending.get(name, (0.0, False))[1])
-    if not bpy.app.timers.is_registered(_timer):
-        bpy.app.timers.register(_timer, first_interval=DEBOUNCE_S)
-
-
-def _timer() -> float | None:
-    now = time.monotonic()
-    waiting = [t for t, _ in _pending.values() if now - t < DEBOUNCE_S]
-    if waiting:
-        return DEBOUNCE_S - (now - max(waiting))
-    run_pending()
-    return None
-
-
-def run_pending() -> dict[str, str]:
-    """Re-fold every pending object once; returns ``{name: "ok" | error message}``. Errors are stored in the
-    object's ``last_message`` (shown in the sidebar) instead of raised: a half-edited curve must not break
-    the session."""
-    from . import fold
-
-    results: dict[str, str] = {}
-    jobs = dict(_pending)
-    _pending.clear()
-    _guard["running"] = True
-    try:
-        for name, (_, rebuild) in jobs.items():
-            ob = bpy.data.objects.get(name)
-            if ob is None or not ob.curved_fold_mesh.is_fold_mesh:
-                continue
-            try:
-                fold.refold(ob, rebuild=None if rebuild else False, max_iterations=LIVE_MAX_ITERATIONS, warm_start=True)
-                results[name] = "ok"
-            except _common.engine_errors() as exc:
-                ob.curved_fold_mesh.last_message = f"live re-fold failed: {exc}"
-                results[name] = str(exc)
-    finally:
-        _guard["running"] = False
-    return results
-
-
-@persistent
-def on_depsgraph_update(scene, depsgraph) -> None:
-    """Detect edits to source curves of live fold objects and schedule debounced re-folds (no work here)."""
-    if _guard["running"]:
-        return
-    updated = [u.id.original if hasattr(u.id, "original") else u.id for u in depsgraph.updates]
-    for name in fold_objects_to_refold(updated, scene):
-        schedule_refold(name)
 
 
 class CURVED_FOLD_OT_toggle_live(bpy.types.Operator):
@@ -144,16 +27,3 @@ class CURVED_FOLD_OT_toggle_live(bpy.types.Operator):
 
 
 CLASSES = (CURVED_FOLD_OT_toggle_live,)
-
-
-def register_extra() -> None:
-    if on_depsgraph_update not in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.append(on_depsgraph_update)
-
-
-def unregister_extra() -> None:
-    if on_depsgraph_update in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.remove(on_depsgraph_update)
-    if bpy.app.timers.is_registered(_timer):
-        bpy.app.timers.unregister(_timer)
-    _pending.clear()

@@ -26,7 +26,8 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-from ..core.pattern import CreaseCurve, CurveSegment, PatternError
+from ..core.io.reader import register_blend_reader
+from ..core.pattern.model import CreaseCurve, CurveSegment, PatternError
 from .properties import ASSIGNMENT_ROLE, ROLE_ASSIGNMENT
 
 PLANE_TOLERANCE = 1e-5
@@ -218,6 +219,9 @@ def read_blend_file(path: str | Path, *, unit_scale: float | None = None) -> lis
             bpy.data.libraries.remove(lib)
         if registered_here:
             _release_properties()
+
+
+register_blend_reader(read_blend_file)
 
 
 def _ensure_properties() -> bool:

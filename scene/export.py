@@ -20,7 +20,7 @@ from xml.sax.saxutils import quoteattr
 import bpy
 import numpy as np
 
-from ..core.mesh import FoldMesh
+from ..core.mesh.fold_mesh import FoldMesh
 
 BLENDER_SUFFIXES = (".obj", ".stl", ".glb", ".gltf", ".blend")
 """Suffixes written through Blender's own exporters."""
@@ -94,11 +94,11 @@ def export_folded_file(
         write_pattern_svg(path, mesh)
         return path
     if suffix == ".fold":
-        from ..core import fold_format
+        from ..core.io import fold as fold_format
 
         angles = fold_angles
         if angles is None:
-            from ..core import metrics
+            from ..core.metrics import measures as metrics
 
             angles = [metrics.fold_angles(mesh, p) for p in arr]
         fold_format.write_folded_fold(path, mesh, list(arr), list(np.atleast_2d(angles)), **fold_kwargs)
@@ -171,7 +171,7 @@ def write_pattern_svg(path: str | Path, mesh: FoldMesh, *, stroke_width: float |
         f"<!-- Curved Fold crease pattern: {int(drawn.sum())} segments, Origami Simulator colours, "
         "opacity = |fold angle| / 180 -->",
     ]
-    from ..core.polylines import chain_edges
+    from ..core.pattern.polylines import chain_edges
 
     for a in SVG_STROKES:
         for poly in np.unique(mesh.edge_polyline[drawn & (mesh.assignments == a)]):
@@ -192,7 +192,7 @@ def write_pattern_svg(path: str | Path, mesh: FoldMesh, *, stroke_width: float |
     lines.append("</svg>")
     text = "\n".join(lines) + "\n"
     try:
-        from ..core.files import atomic_write_text
+        from ..core.io.atomic import atomic_write_text
 
         atomic_write_text(path, text)
     except ImportError:  # core.files is written by another helper; plain write until it exists

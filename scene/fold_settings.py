@@ -34,7 +34,7 @@ SOLVER_MODES = (
 def _schedule(self, rebuild: bool) -> None:
     if not getattr(self, "live", False):
         return
-    from ..operators import live  # lazy: operators import scene, not the other way round at import time
+    from . import live  # lazy: live imports folding, which imports these settings
 
     owner = self.id_data
     if isinstance(owner, bpy.types.Object):

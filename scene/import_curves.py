@@ -13,8 +13,8 @@ from pathlib import Path
 
 import bpy
 
-from ..core.pattern import PatternError
-from ..core.reader import read_curves
+from ..core.io.reader import read_curves
+from ..core.pattern.model import PatternError
 
 SUFFIXES = (".svg", ".fold")
 """The files the Import operator reads (``core.reader.read_curves`` also reads .blend, which Blender opens itself)."""

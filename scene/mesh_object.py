@@ -26,9 +26,9 @@ import colorsys
 import bpy
 import numpy as np
 
-from ..core.mesh import FoldMesh
-from ..core.pattern import ASSIGNMENTS
-from ..core.polylines import chain_edges
+from ..core.mesh.fold_mesh import FoldMesh
+from ..core.pattern.model import ASSIGNMENTS
+from ..core.pattern.polylines import chain_edges
 
 CREASE_COLOURS = {"M": (1.0, 0.0, 0.0, 1.0), "V": (0.0, 0.1, 1.0, 1.0)}
 """Viewport colours of crease edges, as Origami Simulator draws them (mountain red, valley blue)."""

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from curved_fold.core.pattern import CreaseCurve, CreasePattern, CurveSegment
+from curved_fold.core.pattern.model import CreaseCurve, CreasePattern, CurveSegment
 
 # Gauss–Legendre nodes on [-1, 1] used for the §3.2 crease integral (smooth integrand: 1e-13 with one panel per
 # point for the widths used in tests).
@@ -202,7 +202,7 @@ class ParabolaStrip:
 
     def pattern(self) -> CreasePattern:
         """The discretised pattern (needs ``core.discretize``, the INPUT helper's module)."""
-        from curved_fold.core.discretize import discretize
+        from curved_fold.core.pattern.discretize import discretize
 
         return discretize(self.curves, interval=self.interval, tolerance=self.tolerance)
 
@@ -310,7 +310,7 @@ class AnnularSector:
 
     def pattern(self, interval: float | None = None, tolerance: float | None = None) -> CreasePattern:
         """The discretised pattern (needs ``core.discretize``, the INPUT helper's module)."""
-        from curved_fold.core.discretize import discretize
+        from curved_fold.core.pattern.discretize import discretize
 
         return discretize(self.curves, interval=interval, tolerance=tolerance)
 

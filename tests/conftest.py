@@ -26,7 +26,7 @@ Blender-level tests ask for two fixtures::
 * ``extension_zip`` (session): the path of the licence-clean zip the session built.
 * ``view3d`` (function, implies ``clean_scene``): ``window/screen/area/region`` of the 3D viewport for
   ``bpy.context.temp_override(**view3d)`` — for operators and panels that need a 3D viewport context.
-* ``fixtures_dir`` (session): ``../shared/fixtures`` (beside the repository) (skips when absent).
+* ``fixtures_dir`` (session): ``tests/fixtures`` (vendored real crease patterns with their licence and credits).
 * ``ext_module(extension, "scene.curves")`` (plain function, ``from .conftest import ext_module``): import a module
   of the installed copy.
 
@@ -52,8 +52,7 @@ from types import ModuleType
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED = Path(__file__).resolve().parents[2] / "shared"
-FIXTURES = SHARED / "fixtures"
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
 
 REPO_MODULE = "cf_pytest"
 """Module name of the throw-away extension repository the session installs into."""
@@ -156,9 +155,8 @@ def ext_module(extension: ModuleType, name: str) -> ModuleType:
 
 @pytest.fixture(scope="session")
 def fixtures_dir() -> Path:
-    """``../shared/fixtures`` (beside the repository) (shared, never copied into the repo); skips when it is absent."""
-    if not FIXTURES.is_dir():
-        pytest.skip(f"shared fixtures folder {FIXTURES} is absent")
+    """``tests/fixtures``: the real crease patterns vendored into the repository (always present)."""
+    assert FIXTURES.is_dir(), f"vendored fixtures folder {FIXTURES} is missing"
     return FIXTURES
 
 

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-FIXTURES = REPO.parent / "shared" / "fixtures" / "origami-simulator"
+FIXTURES = REPO / "tests" / "fixtures" / "origami-simulator"
 DIGESTS = Path(__file__).resolve().parent / "data" / "mesh_digests.json"
 BACKENDS = ("triangle", "mathutils")
 MESH_TYPES = ("earcut", "cdt", "ruling")
@@ -112,9 +112,9 @@ def input_files() -> list[Path]:
 
 def compute() -> dict:
     """Digests of the current code's results on every recorded case."""
-    from ..core.earcut import ear_clip
-    from ..core.meshing import build_mesh
-    from ..core.reader import read_pattern
+    from ..core.io.reader import read_pattern
+    from ..core.mesh.build import build_mesh
+    from ..core.mesh.earcut import ear_clip
 
     out: dict = {"hand_made": {}, "inputs": {}, "ear_clip": {}}
     for name, make in hand_made_cases().items():

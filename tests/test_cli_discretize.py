@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
+FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 REPO = Path(__file__).resolve().parents[1]
 
@@ -24,7 +24,6 @@ def run(*args: str) -> subprocess.CompletedProcess:
     )
 
 
-@pytest.mark.skipif(not (FIXTURES / "wavy_pleats.svg").exists(), reason=f"fixture folder {FIXTURES} is absent")
 def test_discretize_wavy_pleats(tmp_path: Path) -> None:
     out = tmp_path / "w.fold"
     res = run(str(FIXTURES / "wavy_pleats.svg"), "--out", str(out))

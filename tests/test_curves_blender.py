@@ -12,9 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from curved_fold.core.discretize import discretize
-from curved_fold.core.pattern import CreaseCurve, CurveSegment
-from curved_fold.core.svg import parse_svg_text
+from curved_fold.core.io.svg import parse_svg_text
+from curved_fold.core.pattern.discretize import discretize
+from curved_fold.core.pattern.model import CreaseCurve, CurveSegment
 
 bpy = pytest.importorskip("bpy")
 

@@ -10,18 +10,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from curved_fold.core.discretize import (
+from curved_fold.core.io.svg import parse_svg_text, read_svg
+from curved_fold.core.pattern.discretize import (
     MAX_SEGMENTS,
     curve_parameters,
     default_parameters,
     discretize,
     sheet_size,
 )
-from curved_fold.core.pattern import CreaseCurve, CurveSegment, PatternError
-from curved_fold.core.svg import parse_svg_text, read_svg
+from curved_fold.core.pattern.model import CreaseCurve, CurveSegment, PatternError
 
-FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
-needs_fixtures = pytest.mark.skipif(not FIXTURES.is_dir(), reason=f"fixture folder {FIXTURES} is absent")
+FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 FIXTURE_FILES = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -196,7 +195,6 @@ def test_bad_parameters_and_input() -> None:
 # ------------------------------------------------------------------------------------------------ fixtures
 
 
-@needs_fixtures
 @pytest.mark.parametrize("path", FIXTURE_FILES, ids=lambda p: p.name)
 def test_every_fixture_discretises(path: Path) -> None:
     drawing = read_svg(path)
@@ -229,7 +227,6 @@ def test_every_fixture_discretises(path: Path) -> None:
     assert lengths[p.edge_from_curve].max(initial=0) <= interval * (1 + 1e-9)
 
 
-@needs_fixtures
 def test_treble_clef_curved_border_is_one_closed_polyline() -> None:
     p = discretize(read_svg(FIXTURES / "Treble_Clef.svg").curves)
     border = p.edges[p.assignments == "B"]
@@ -253,7 +250,6 @@ def test_treble_clef_curved_border_is_one_closed_polyline() -> None:
     assert len(ends) == 2 and all(deg[e] == 2 for e in ends)
 
 
-@needs_fixtures
 def test_circular_pleat_radial_facets_split_at_ring_vertices() -> None:
     p = discretize(read_svg(FIXTURES / "CircularPleat-antiFacet.svg").curves)
     assert p.n_vertices == 1600 and p.count("M") == 700 and p.count("V") == 700 and p.count("B") == 200
@@ -390,7 +386,6 @@ def test_lines_through_a_junction_that_miss_it_by_a_hair_snap_to_it() -> None:
     assert np.count_nonzero(p.edges == h) == 7
 
 
-@needs_fixtures
 def test_curved_pleat_simple_hub_is_clean() -> None:
     p = discretize(read_svg(FIXTURES / "curvedPleatSimple.svg").curves)
     assert (p.count("M"), p.count("V"), p.count("F")) == (1, 1, 14)

@@ -45,7 +45,13 @@ def test_licence_clean_zip_contents(extension_zip: Path):
         names = set(zf.namelist())
         manifest = tomllib.loads(zf.read("blender_manifest.toml").decode())
     assert not [n for n in names if n.endswith(".whl")], "the licence-clean zip must not bundle any wheel"
-    for required in ("__init__.py", "blender_manifest.toml", "core/pattern.py", "scene/curves.py", "cli.py"):
+    for required in (
+        "__init__.py",
+        "blender_manifest.toml",
+        "core/pattern/model.py",
+        "scene/curves.py",
+        "cli/__init__.py",
+    ):
         assert required in names
     dev_only = ("tests/", "docs/", "benchmarks/", "tools/", ".ci/", ".venv", "dist/", ".git/", "__pycache__")
     leaked = sorted(n for n in names if n.startswith(dev_only) or "__pycache__" in n)
@@ -88,7 +94,7 @@ def test_extension_installed_from_zip_and_enabled(extension):
     repo = extension_repository()
     assert installed == (Path(repo.directory) / "curved_fold").resolve()
     assert installed != REPO
-    assert not (installed / "tests").exists() and (installed / "core" / "pattern.py").is_file()
+    assert not (installed / "tests").exists() and (installed / "core" / "pattern" / "model.py").is_file()
 
 
 def test_operators_and_properties_registered(extension, clean_scene):
@@ -104,7 +110,7 @@ def test_operators_and_properties_registered(extension, clean_scene):
 
 
 def test_cli_command_registered(extension, capsys, tmp_path):
-    command_line = importlib.import_module(extension.__name__ + ".scene.command_line")
+    command_line = importlib.import_module(extension.__name__ + ".cli.blender")
     assert command_line.is_registered()
     # The callback Blender calls for `blender -c curved_fold ...` runs the package's command line.
     assert command_line.run_cli_command(["--help"]) == 0
@@ -118,7 +124,7 @@ def test_disable_unregisters_cleanly_then_enable_again(extension):
     import addon_utils
 
     name = extension.__name__
-    command_line = sys.modules[name + ".scene.command_line"]
+    command_line = sys.modules[name + ".cli.blender"]
     addon_utils.disable(name, default_set=True)
     try:
         assert addon_utils.check(name)[1] is False

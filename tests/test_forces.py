@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curved_fold.core import forces as F  # noqa: N812
-from curved_fold.core.model import build_model, mesh_from_triangles
+from curved_fold.core.solve import forces as F  # noqa: N812
+from curved_fold.core.solve.model import build_model, mesh_from_triangles
 
 
 def grid_mesh(nx: int = 3, ny: int = 3, size: float = 30.0, creases=None):

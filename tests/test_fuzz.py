@@ -23,10 +23,10 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from curved_fold.core.discretize import discretize
-from curved_fold.core.pattern import CreaseCurve, CurveSegment, PatternError
+from curved_fold.core.pattern.discretize import discretize
+from curved_fold.core.pattern.model import CreaseCurve, CurveSegment, PatternError
 from curved_fold.core.pipeline import fold_pattern
-from curved_fold.core.solver import SolverError, SolverSettings
+from curved_fold.core.solve.solver import SolverError, SolverSettings
 
 STRAIN_BOUND_PCT = 100.0
 """Largest per-node strain (Origami Simulator's mean |ℓ/L0 − 1| of a node's bars, percent) a folded result may

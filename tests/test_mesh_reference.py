@@ -13,10 +13,10 @@ import json
 import numpy as np
 import pytest
 
-from curved_fold.core.earcut import ear_clip
-from curved_fold.core.meshing import build_mesh
-from curved_fold.core.ruling import EndpointScorer
-from curved_fold.core.triangulate import _incircle_scalar, incircle
+from curved_fold.core.mesh.build import build_mesh
+from curved_fold.core.mesh.earcut import ear_clip
+from curved_fold.core.mesh.ruling import EndpointScorer
+from curved_fold.core.mesh.triangulate import _incircle_scalar, incircle
 from tests import mesh_digests as md
 from tests.analytic import bisector_case
 
@@ -25,10 +25,9 @@ INPUTS = md.input_files()
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not INPUTS, reason="neither the shared fixtures nor examples/ found")
 @pytest.mark.parametrize("path", INPUTS, ids=[p.name for p in INPUTS])
 def test_same_meshes_as_reference_on_inputs(path) -> None:
-    from curved_fold.core.reader import read_pattern
+    from curved_fold.core.io.reader import read_pattern
 
     recorded = RECORDED["inputs"].get(path.name)
     assert recorded is not None, f"{path.name}: no recorded digest; regenerate tests/data/mesh_digests.json"

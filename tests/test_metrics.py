@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curved_fold.core import metrics
-from curved_fold.core.meshing import build_mesh
-from curved_fold.core.pattern import CreasePattern
+from curved_fold.core.mesh.build import build_mesh
+from curved_fold.core.metrics import measures as metrics
+from curved_fold.core.pattern.model import CreasePattern
 from tests.analytic import annular_sector, bisector_case, parabola_strip
 
 

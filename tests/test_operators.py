@@ -346,8 +346,8 @@ def test_import_svg_round_trip(folded, tmp_path):
 def test_import_fold_round_trip(extension, clean_scene, tmp_path):
     border, crease = curved_pattern()
     curves = mod(extension, "scene.curves").curves_from_objects([border, crease])
-    discretize = importlib.import_module("curved_fold.core.discretize").discretize
-    fold_format = importlib.import_module("curved_fold.core.fold_format")
+    discretize = importlib.import_module("curved_fold.core.pattern.discretize").discretize
+    fold_format = importlib.import_module("curved_fold.core.io.fold")
     pattern = discretize(curves)
     fold_format.write_pattern_fold(tmp_path / "cp.fold", pattern)
     assert bpy.ops.curved_fold.import_pattern(filepath=str(tmp_path / "cp.fold")) == {"FINISHED"}
@@ -371,7 +371,7 @@ def test_import_failure_leaves_scene(extension, clean_scene, tmp_path):
 
 def test_live_handler_detects_source_edits_and_refolds(folded, extension):
     ob, border, crease = folded
-    live = mod(extension, "operators.live")
+    live = mod(extension, "scene.live")
     assert live.fold_objects_to_refold([crease]) == []  # Live is off
     ob.curved_fold_mesh.live = True
     live._pending.clear()
@@ -407,7 +407,7 @@ def test_live_handler_detects_source_edits_and_refolds(folded, extension):
 def test_depsgraph_handler_schedules_on_curve_edit(folded, extension):
     """The registered handler itself: a real depsgraph update of a source curve queues a re-fold (debounced)."""
     ob, _, crease = folded
-    live = mod(extension, "operators.live")
+    live = mod(extension, "scene.live")
     assert live.on_depsgraph_update in bpy.app.handlers.depsgraph_update_post
     ob.curved_fold_mesh.live = True
     live._pending.clear()

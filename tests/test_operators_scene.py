@@ -14,9 +14,9 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from curved_fold.core.mesh import FoldMesh  # noqa: E402
-from curved_fold.core.pattern import CreasePattern  # noqa: E402
-from curved_fold.core.polylines import curves_from_pattern  # noqa: E402
+from curved_fold.core.mesh.fold_mesh import FoldMesh  # noqa: E402
+from curved_fold.core.pattern.model import CreasePattern  # noqa: E402
+from curved_fold.core.pattern.polylines import curves_from_pattern  # noqa: E402
 from curved_fold.scene import bake, export, mesh_object  # noqa: E402
 
 

@@ -6,16 +6,13 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pytest
 
-FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
-needs_fixtures = pytest.mark.skipif(not FIXTURES.is_dir(), reason=f"fixture folder {FIXTURES} is absent")
+FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 
 
-@needs_fixtures
 def test_fold_pattern_report_on_simple_vertex():
+    from curved_fold.core.io.reader import read_pattern
     from curved_fold.core.pipeline import fold_pattern
-    from curved_fold.core.reader import read_pattern
 
     run = fold_pattern(read_pattern(FIXTURES / "simpleVertex.svg"), percent=0.6)
     r = run.report
@@ -44,7 +41,6 @@ def test_fold_pattern_report_on_simple_vertex():
     assert run.result.positions.shape == (run.mesh.n_vertices, 3)
 
 
-@needs_fixtures
 def test_cli_fold_writes_fold_and_report(tmp_path):
     from curved_fold.cli import main
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curved_fold.core.model import mesh_from_triangles
-from curved_fold.core.solver import Solver, SolverSettings, rigid_rms, solve
+from curved_fold.core.solve.model import mesh_from_triangles
+from curved_fold.core.solve.solver import Solver, SolverSettings, rigid_rms, solve
 from tests.analytic import annular_sector, bisector_case
 from tests.test_forces import grid_mesh
 
@@ -145,7 +145,7 @@ def test_skinny_triangles_stay_finite_with_all_terms_time_step():
 
 def test_all_terms_time_step_accounts_for_skinny_hinges():
     """Origami Simulator's dt sees only the shortest bar; ours shrinks with the hinge stiffness k/h² (§3.7)."""
-    from curved_fold.core.solver_faithful import time_step
+    from curved_fold.core.solve.faithful import time_step
 
     fat = mesh_from_triangles(
         np.array([[0, 0], [100, 0], [50, 50], [50, -50]], float), np.array([[0, 1, 2], [1, 0, 3]])

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from curved_fold.core.animation import FoldAnimation
-from curved_fold.core.solver import SolverSettings
+from curved_fold.core.solve.animation import FoldAnimation
+from curved_fold.core.solve.solver import SolverSettings
 from tests.test_forces import grid_mesh
 
 
@@ -44,7 +44,7 @@ def test_dynamic_frames_carry_velocity_and_approach_equilibrium():
 def test_predictor_frames_match_cold_solves_and_survive_reversal():
     """Extrapolated starts must not change the answer: each frame equals a solve from the flat sheet, also after the
     fold percent turns round."""
-    from curved_fold.core.solver import rigid_rms, solve
+    from curved_fold.core.solve.solver import rigid_rms, solve
 
     mesh = crease_grid()
     anim = FoldAnimation(mesh, SolverSettings(tolerance=1e-8))

@@ -7,18 +7,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from curved_fold.core.solver import Solver, SolverError, SolverSettings, rigid_rms
-from curved_fold.core.solver_faithful import time_step
+from curved_fold.core.solve.faithful import time_step
+from curved_fold.core.solve.solver import Solver, SolverError, SolverSettings, rigid_rms
 from tests.analytic import annular_sector
 from tests.test_forces import grid_mesh
 
-FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
-needs_fixtures = pytest.mark.skipif(not FIXTURES.is_dir(), reason=f"fixture folder {FIXTURES} is absent")
+FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 
 
 def fixture_mesh(name: str):
-    from curved_fold.core.meshing import build_mesh
-    from curved_fold.core.reader import read_pattern
+    from curved_fold.core.io.reader import read_pattern
+    from curved_fold.core.mesh.build import build_mesh
 
     return build_mesh(read_pattern(FIXTURES / name), mesh_type="ruling")
 
@@ -30,7 +29,6 @@ def test_forced_huge_time_step_raises_solver_error_naming_the_step():
         solver.solve(1.0)
 
 
-@needs_fixtures
 def test_origami_simulator_time_step_explodes_on_curved_pleat_but_ours_does_not():
     """curvedPleatSimple's short bars and skinny hinges: Origami Simulator's dt is above the stability limit."""
     mesh = fixture_mesh("curvedPleatSimple.svg")
@@ -70,11 +68,10 @@ def test_fast_and_faithful_reach_the_same_equilibrium_on_the_analytic_sector():
     assert slow.result.force_evaluations >= 100 * fast.result.force_evaluations
 
 
-@needs_fixtures
 @pytest.mark.parametrize("name", ["simpleVertex.svg", "curvedPleatSimple.svg"])
 def test_pipeline_on_fixture_reports_metrics_and_converges(name):
+    from curved_fold.core.io.reader import read_pattern
     from curved_fold.core.pipeline import fold_pattern
-    from curved_fold.core.reader import read_pattern
 
     run = fold_pattern(read_pattern(FIXTURES / name), percent=0.6)
     r = run.report
@@ -88,9 +85,8 @@ def test_pipeline_on_fixture_reports_metrics_and_converges(name):
     assert np.nanmax(np.abs(run.result.fold_angles[crease])) > 60  # 60 % of 180° creases: clearly folded
 
 
-@needs_fixtures
 def test_isometric_setting_keeps_strain_below_five_hundredths_of_a_percent():
-    from curved_fold.core.metrics import summary
+    from curved_fold.core.metrics.measures import summary
 
     mesh = fixture_mesh("simpleVertex.svg")
     normal = Solver(mesh, SolverSettings(), "fast").solve(0.6)
@@ -101,7 +97,6 @@ def test_isometric_setting_keeps_strain_below_five_hundredths_of_a_percent():
     assert s_iso <= 0.05 and s_iso < 0.1 * s_normal, (s_iso, s_normal)
 
 
-@needs_fixtures
 def test_warm_start_from_positions_alone_keeps_a_crease_folded_past_flat():
     """curvedPleatSimple at 100 %: its creases end slightly past 180° (measured angles wrap to about −179°). A re-solve
     from the stored positions, with no angle history (what re-fold and live do), must read them on the branch nearest

@@ -11,11 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from curved_fold.core.pattern import CurveSegment, PatternError
-from curved_fold.core.svg import PX_MM, parse_svg_text, read_svg, stroke_assignment
+from curved_fold.core.io.svg import PX_MM, parse_svg_text, read_svg, stroke_assignment
+from curved_fold.core.pattern.model import CurveSegment, PatternError
 
-FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "origami-simulator"
-needs_fixtures = pytest.mark.skipif(not FIXTURES.is_dir(), reason=f"fixture folder {FIXTURES} is absent")
+FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 FIXTURE_FILES = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
 
 # Independent colour table (origami-simulator-model.md §5.1), used to count the files' elements without core.svg.
@@ -66,7 +65,6 @@ def user(points) -> np.ndarray:
 # ------------------------------------------------------------------------------------------------ fixtures
 
 
-@needs_fixtures
 @pytest.mark.parametrize("path", FIXTURE_FILES, ids=lambda p: p.name)
 def test_fixture_counts_match_the_file(path: Path) -> None:
     drawing = read_svg(path)
@@ -79,7 +77,6 @@ def test_fixture_counts_match_the_file(path: Path) -> None:
             assert np.all(np.isfinite(s.points))
 
 
-@needs_fixtures
 def test_fixture_counts_match_the_reference_table() -> None:
     expected = {
         "wavy_pleats.svg": {"B": 1, "M": 3, "V": 2},
@@ -96,7 +93,6 @@ def test_fixture_counts_match_the_reference_table() -> None:
     assert huffman["U"] == 13 and huffman["B"] == 12
 
 
-@needs_fixtures
 def test_fixture_fold_angles_from_opacity() -> None:
     angles = Counter((c.assignment, c.fold_angle) for c in read_svg(FIXTURES / "shell14.svg").curves)
     assert angles[("M", -90.0)] == 560 and angles[("V", 90.0)] == 560 and angles[("F", 0.0)] == 1064
@@ -112,7 +108,6 @@ def test_fixture_fold_angles_from_opacity() -> None:
     assert all(c.is_curved for c in wavy.curves if c.assignment != "B")
 
 
-@needs_fixtures
 def test_treble_clef_border_is_one_closed_curved_path() -> None:
     border = [c for c in read_svg(FIXTURES / "Treble_Clef.svg").curves if c.assignment == "B"]
     assert len(border) == 1 and border[0].closed and border[0].is_curved
@@ -317,7 +312,7 @@ def test_arc_under_any_affine_transform_is_the_exact_image(transform: str) -> No
     d = "M10 10 A 20 8 25 0 1 30 25"
     (plain,) = curves_of(f'<path stroke="red" d="{d}"/>')
     (moved,) = curves_of(f'<g transform="{transform}"><path stroke="red" d="{d}"/></g>')
-    from curved_fold.core.svg import parse_transform
+    from curved_fold.core.io.svg import parse_transform
 
     m = parse_transform(transform)
     t = np.linspace(0, 1, 33)

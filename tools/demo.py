@@ -31,7 +31,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 IMG = REPO / "docs" / "img"
-FIXTURE = REPO.parent / "shared" / "fixtures" / "origami-simulator" / "wavy_pleats.svg"
+FIXTURE = REPO / "tests" / "fixtures" / "origami-simulator" / "wavy_pleats.svg"
 
 COLOURS = {"B": "#000000", "M": "#e00000", "V": "#0030ff", "F": "#d8c000", "U": "#c000c0", "C": "#00a000"}
 """Crease-pattern drawing colours per FOLD assignment (Origami Simulator's SVG convention)."""
@@ -73,7 +73,7 @@ def fold_example(svg: Path, out: Path) -> bool:
 
 def _draw_pattern(ax, svg: Path) -> None:
     """Draw the flat crease pattern of ``svg`` (as discretised by the engine) on a matplotlib axis, SVG y-down."""
-    from curved_fold.core.reader import read_pattern
+    from curved_fold.core.io.reader import read_pattern
 
     pattern = read_pattern(svg)
     v = pattern.vertices

@@ -19,7 +19,7 @@ import bpy
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-FIXTURE = Path(__file__).resolve().parents[3] / "shared" / "fixtures" / "origami-simulator" / "wavy_pleats.svg"
+FIXTURE = Path(__file__).resolve().parents[2] / "tests" / "fixtures" / "origami-simulator" / "wavy_pleats.svg"
 
 
 def setup_addon():

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .mesh import FoldMesh
+from ..mesh.fold_mesh import FoldMesh
 from .solver import Solver, SolverSettings
 
 

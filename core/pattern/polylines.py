@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .pattern import CreaseCurve, CreasePattern, CurveSegment
+from .model import CreaseCurve, CreasePattern, CurveSegment
 
 
 def chain_edges(edges: np.ndarray) -> list[np.ndarray]:

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .pattern import CreasePattern, PatternError
+from ..pattern.model import CreasePattern, PatternError
 
 BACKENDS = ("auto", "triangle", "mathutils")
 

@@ -1,7 +1,8 @@
 """The third front door: ``blender -c curved_fold <subcommand> ...`` runs the same command line as
-``python -m curved_fold`` (see :mod:`..cli`), inside Blender, with the add-on enabled.
+``python -m curved_fold`` (see :mod:`.`), inside Blender, with the add-on enabled.
 
-Registered with ``bpy.utils.register_cli_command`` when the extension is enabled, unregistered when disabled.
+Registered with ``bpy.utils.register_cli_command`` when the extension is enabled (:func:`register`, called by
+the add-on's ``register``), unregistered when disabled.
 """
 
 from __future__ import annotations
@@ -15,8 +16,8 @@ _handle = None
 
 
 def run_cli_command(argv: list[str]) -> int:
-    """Callback of ``blender -c curved_fold``: run :func:`..cli.main` on the arguments after the command id."""
-    from ..cli import main
+    """Callback of ``blender -c curved_fold``: run :func:`.main` on the arguments after the command id."""
+    from . import main
 
     try:
         return int(main(list(argv)) or 0)
@@ -29,13 +30,13 @@ def is_registered() -> bool:
     return _handle is not None
 
 
-def register_extra() -> None:
+def register() -> None:
     global _handle
     if _handle is None and hasattr(bpy.utils, "register_cli_command"):
         _handle = bpy.utils.register_cli_command(COMMAND_ID, run_cli_command)
 
 
-def unregister_extra() -> None:
+def unregister() -> None:
     global _handle
     if _handle is not None:
         bpy.utils.unregister_cli_command(_handle)

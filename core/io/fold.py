@@ -23,9 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from .files import atomic_write_text
-from .mesh import FoldMesh
-from .pattern import ASSIGNMENTS, CreasePattern, PatternError
+from ..mesh.fold_mesh import FoldMesh
+from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
+from .atomic import atomic_write_text
 
 UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "pt": 25.4 / 72.0, "um": 1e-3, "nm": 1e-6, "unit": 1.0}
 """Millimetres per FOLD ``frame_unit``; ``unit`` (unitless, the FOLD default) is taken as millimetres."""

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .pattern import CreaseCurve, CurveSegment, PatternError
+from ..pattern.model import CreaseCurve, CurveSegment, PatternError
 
 PX_MM = 25.4 / 96.0
 """Millimetres per CSS pixel (one SVG user unit when the file gives no physical size)."""

@@ -2,29 +2,36 @@
 
 :func:`read_pattern` dispatches on the suffix and always returns a discretised :class:`~.pattern.CreasePattern`;
 :func:`read_curves` returns :class:`~.pattern.CreaseCurve` objects (exact curves; polylines for FOLD) for the Import
-operator, which turns them into Blender curves. Reading a .blend file needs Blender's ``bpy`` and is delegated lazily to
-``scene.curves.read_blend_file`` so this module never imports bpy itself.
+operator, which turns them into Blender curves. Reading a .blend file needs Blender's ``bpy``: the Blender layer
+registers its reader (``scene.curves.read_blend_file``) with :func:`register_blend_reader`, so the engine never imports
+``bpy`` or the layers above it.
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 
-from .discretize import discretize
-from .pattern import CreaseCurve, CreasePattern, PatternError
+from ..pattern.discretize import discretize
+from ..pattern.model import CreaseCurve, CreasePattern, PatternError
 
 SUFFIXES = (".svg", ".fold", ".blend")
 
 
+_blend_reader: list[Callable[[str], list[CreaseCurve]]] = []
+"""The registered .blend reader (at most one), see :func:`register_blend_reader`."""
+
+
+def register_blend_reader(reader: Callable[[str], list[CreaseCurve]]) -> None:
+    """Let :func:`read_curves` open .blend files with ``reader`` (path → crease curves); Blender's layer calls this."""
+    _blend_reader[:] = [reader]
+
+
 def _blend_curves(path: Path) -> list[CreaseCurve]:
-    try:
-        from ..scene.curves import read_blend_file
-    except ImportError as exc:
-        raise PatternError(
-            f"{path.name}: reading .blend files needs Blender (bpy) and the add-on's scene.curves module: {exc}"
-        ) from None
-    curves = read_blend_file(str(path))
+    if not _blend_reader:
+        raise PatternError(f"{path.name}: reading .blend files needs Blender (bpy), which is not available here")
+    curves = _blend_reader[0](str(path))
     if not curves:
         raise PatternError(f"{path.name}: no crease curves found in the .blend file")
     return curves
@@ -53,8 +60,8 @@ def read_curves(path: str | os.PathLike[str]) -> tuple[list[CreaseCurve], list[s
         return drawing.curves, list(drawing.warnings)
     if suffix == ".blend":
         return _blend_curves(p), []
-    from .fold_format import fold_to_pattern, read_fold
-    from .polylines import curves_from_pattern
+    from ..pattern.polylines import curves_from_pattern
+    from .fold import fold_to_pattern, read_fold
 
     pattern = fold_to_pattern(read_fold(p))
     return curves_from_pattern(pattern), list(pattern.warnings)
@@ -76,7 +83,7 @@ def read_pattern(
     p = Path(path)
     suffix = _suffix(p)
     if suffix == ".fold":
-        from .fold_format import fold_to_pattern, read_fold
+        from .fold import fold_to_pattern, read_fold
 
         return fold_to_pattern(read_fold(p))
     curves, warnings = read_curves(p)

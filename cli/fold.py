@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from ..core.pattern import PatternError
+from ..core.pattern.model import PatternError
 
 OUTPUT_SUFFIXES = (".fold", ".obj", ".glb", ".blend")
 
@@ -27,8 +27,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..core.io.reader import read_pattern
     from ..core.pipeline import fold_pattern
-    from ..core.reader import read_pattern
 
     out = Path(args.out)
     if out.suffix.lower() not in OUTPUT_SUFFIXES:
@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     )
     r = fold.report
     if out.suffix.lower() == ".fold":
-        from ..core.fold_format import write_folded_fold
+        from ..core.io.fold import write_folded_fold
 
         write_folded_fold(out, fold.mesh, [fold.result.positions], [fold.result.fold_angles])
     else:
@@ -49,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
             raise PatternError(f"--out {out}: {out.suffix} output needs Blender's bpy ({exc})") from exc
         export_folded_file(out, fold.mesh, fold.result.positions, fold_angles=fold.result.fold_angles)
     if args.report:
-        from ..core.files import atomic_write_text
+        from ..core.io.atomic import atomic_write_text
 
         clean = {k: (None if isinstance(v, float) and v != v else v) for k, v in r.items()}  # NaN is not JSON
         atomic_write_text(args.report, json.dumps(clean, indent=2, default=float))

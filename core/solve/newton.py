@@ -27,8 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .forces import Evaluation, evaluate, hessian_matvec
+from .linalg import BlockFactor, BlockTridiagonal
 from .model import BarHingeModel
-from .solver_linalg import BlockFactor, BlockTridiagonal
 
 MAX_STEP = 0.25
 """Largest nodal displacement of one Newton step, in normalised units (the model fits in a unit sphere)."""

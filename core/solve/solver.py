@@ -19,12 +19,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..mesh.fold_mesh import FoldMesh
+from .faithful import SolverError, faithful_solve, time_step
 from .forces import characteristic_force, evaluate
-from .mesh import FoldMesh
+from .linalg import single_threaded_blas
 from .model import BarHingeModel, build_model
-from .solver_faithful import SolverError, faithful_solve, time_step
-from .solver_linalg import single_threaded_blas
-from .solver_newton import HessianAssembler, newton_solve
+from .newton import HessianAssembler, newton_solve
 
 METHODS = ("fast", "faithful", "isometric")
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .mesh import FoldMesh
+from ..mesh.fold_mesh import FoldMesh
 
 WARP_MIN_FOLD_DEG = 0.5
 """Edges folded less than this are "flat" and left out of the warp-angle mean (authors' threshold)."""

@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from .pattern import CreaseCurve, CreasePattern, CurveSegment, PatternError
+from .model import CreaseCurve, CreasePattern, CurveSegment, PatternError
 
 REFERENCE_SIZE_MM = 150.0
 """Sheet width the paper's parameters were chosen for (§4)."""

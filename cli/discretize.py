@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..core.pattern import ASSIGNMENT_NAMES, ASSIGNMENTS, PatternError
+from ..core.pattern.model import ASSIGNMENT_NAMES, ASSIGNMENTS, PatternError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,9 +32,9 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``discretize``; returns the exit code."""
     import time
 
-    from ..core.discretize import default_parameters, discretize, sheet_size
-    from ..core.fold_format import write_pattern_fold
-    from ..core.reader import read_curves, read_pattern
+    from ..core.io.fold import write_pattern_fold
+    from ..core.io.reader import read_curves, read_pattern
+    from ..core.pattern.discretize import default_parameters, discretize, sheet_size
 
     path = Path(args.input)
     out = Path(args.out)

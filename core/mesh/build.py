@@ -18,9 +18,9 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from ..pattern.model import CreasePattern
 from .earcut import ear_clip
-from .mesh import FoldMesh
-from .pattern import CreasePattern
+from .fold_mesh import FoldMesh
 from .ruling import ruling_swaps
 from .triangulate import _outer_first, constrained_triangulation, face_loops, orient, resolve_backend, split_cuts
 

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .mesh import FoldMesh
-from .pattern import PatternError
+from ..mesh.fold_mesh import FoldMesh
+from ..pattern.model import PatternError
 
 
 @dataclass

@@ -1,7 +1,8 @@
-"""The headless command line: ``python -m curved_fold <subcommand> ...``.
+"""The command line, one home for its three doors: ``python -m curved_fold <subcommand> ...``,
+``blender -c curved_fold <subcommand> ...`` (:mod:`.blender`) and scripts calling :func:`main`.
 
-Each subcommand lives in a function ``_cmd_<name>`` and is registered in :func:`build_parser`. The same core
-pipeline runs here, in Blender's ``blender -c curved_fold ...`` and behind the operators.
+Each subcommand is a module here with ``register(sub)`` (``discretize``, ``fold``), added by :func:`build_parser`.
+The same core pipeline runs here and behind the operators.
 """
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .core.pattern import PatternError
+from ..core.pattern.model import PatternError
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -18,16 +19,26 @@ def build_parser() -> argparse.ArgumentParser:
         description="Fold curved-crease patterns (Bézier creases, ruling-aware triangulation, bar-and-hinge solver).",
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    from . import commands
+    from . import discretize, fold
 
-    commands.register(sub)
+    discretize.register(sub)
+    fold.register(sub)
     return parser
+
+
+def _enable_blend_files() -> None:
+    """Register the .blend reader of the Blender layer when ``bpy`` can be imported (it cannot in plain Python)."""
+    try:
+        from ..scene import curves  # noqa: F401  (registers scene.curves.read_blend_file with core.io.reader)
+    except ImportError:
+        pass
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the process exit code (0 ok, 2 bad input)."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    _enable_blend_files()
     try:
         return int(args.func(args) or 0)
     except PatternError as exc:

@@ -179,3 +179,21 @@ def test_twenty_thousand_faces_bounded():
     assert np.all(np.isfinite(r.positions))
     assert r.iterations <= 6
     assert np.nanmax(r.fold_angles) > 60
+
+
+def test_solve_steps_yields_each_iteration_and_equals_solve():
+    """The sliced solve (one Newton iteration per ``next``, for Blender's modal jobs) gives exactly :meth:`solve`."""
+    mesh = bisector_mesh()[1]
+    whole = Solver(mesh).solve(0.8)
+    steps = Solver(mesh).solve_steps(0.8)
+    seen = []
+    while True:
+        try:
+            seen.append(next(steps))
+        except StopIteration as done:
+            sliced = done.value
+            break
+    assert [p.iteration for p in seen] == list(range(1, whole.iterations + 1))
+    assert seen[-1].residual == pytest.approx(sliced.residual)
+    np.testing.assert_array_equal(sliced.positions, whole.positions)
+    assert sliced.converged and sliced.iterations == whole.iterations

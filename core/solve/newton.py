@@ -22,6 +22,7 @@ reduces the residual force instead.
 from __future__ import annotations
 
 import time
+from collections.abc import Generator
 from dataclasses import dataclass
 
 import numpy as np
@@ -95,7 +96,34 @@ class NewtonStats:
     message: str = ""
 
 
+@dataclass
+class NewtonProgress:
+    """What one Newton iteration leaves behind (yielded by :func:`newton_steps`, e.g. for a progress bar)."""
+
+    iteration: int
+    residual: float
+    x: np.ndarray
+    theta: np.ndarray
+
+
 def newton_solve(
+    model: BarHingeModel,
+    x0: np.ndarray,
+    theta0: np.ndarray,
+    percent: float,
+    **options,
+) -> tuple[np.ndarray, np.ndarray, Evaluation, NewtonStats, float]:
+    """Minimise the energy from ``x0`` (normalised) with fold-angle history ``theta0`` to the end (see
+    :func:`newton_steps` for the options). Returns ``(x, theta, evaluation at x, stats, final λ)``."""
+    steps = newton_steps(model, x0, theta0, percent, **options)
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+
+
+def newton_steps(
     model: BarHingeModel,
     x0: np.ndarray,
     theta0: np.ndarray,
@@ -107,10 +135,12 @@ def newton_solve(
     assembler: HessianAssembler | None = None,
     time_limit: float | None = None,
     lm_lambda: float = 1e-3,
-) -> tuple[np.ndarray, np.ndarray, Evaluation, NewtonStats, float]:
-    """Minimise the energy from ``x0`` (normalised) with fold-angle history ``theta0``.
+) -> Generator[NewtonProgress, None, tuple[np.ndarray, np.ndarray, Evaluation, NewtonStats, float]]:
+    """Minimise the energy from ``x0`` (normalised) with fold-angle history ``theta0``, one iteration per ``next``.
 
-    Returns ``(x, theta, evaluation at x, stats, final λ)``. The residual is ``max_i |F_i| / force_scale``.
+    Yields a :class:`NewtonProgress` after every accepted iteration, so a caller can work in slices (Blender's modal
+    jobs) and stop between any two; the generator's return value (``StopIteration.value``) is
+    ``(x, theta, evaluation at x, stats, final λ)``. The residual is ``max_i |F_i| / force_scale``.
     """
     assembler = assembler or HessianAssembler(model)
     stats = NewtonStats()
@@ -193,6 +223,7 @@ def newton_solve(
         else:
             ev = evaluate(model, x, tev.theta, percent, jacobians=True)
             stats.force_evaluations += 1
+        yield NewtonProgress(it + 1, float(np.max(np.linalg.norm(ev.forces, axis=1))) / force_scale, x, ev.theta)
     return x, ev.theta, ev, stats, lam / force_scale
 
 

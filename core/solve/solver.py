@@ -15,6 +15,7 @@ the iteration count. Positions come back in the mesh's millimetres.
 from __future__ import annotations
 
 import time
+from collections.abc import Generator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -24,7 +25,7 @@ from .faithful import SolverError, faithful_solve, time_step
 from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
 from .model import BarHingeModel, build_model
-from .newton import HessianAssembler, newton_solve
+from .newton import HessianAssembler, newton_steps
 
 METHODS = ("fast", "faithful", "isometric")
 
@@ -88,6 +89,24 @@ class FoldResult:
     @property
     def ms(self) -> float:
         return self.simulation_ms
+
+
+@dataclass
+class SolveProgress:
+    """One step of a sliced solve (:meth:`Solver.solve_steps`): iteration, residual, positions (mm) reached."""
+
+    iteration: int
+    residual: float
+    positions: np.ndarray
+
+
+def _drain(steps: Generator[SolveProgress, None, FoldResult]) -> FoldResult:
+    """Run a stepping solve to its end and return its result."""
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
 
 
 class Solver:
@@ -167,11 +186,7 @@ class Solver:
         s = self.settings
         model = self.model
         t0 = time.perf_counter()
-        x0 = model.rest.copy() if start is None else model.from_mm(start)
-        if x0.shape != model.rest.shape or not np.all(np.isfinite(x0)):
-            raise SolverError(f"start positions must be a finite ({model.n_nodes}, 3) array, got shape {x0.shape}")
-        if theta_prev is None:
-            theta_prev = self.start_angles(x0, percent)
+        x0, theta_prev = self._start(start, theta_prev, percent)
         if self.method == "faithful":
             v0 = np.zeros_like(x0) if velocities is None else np.asarray(velocities, dtype=np.float64)
             x, v, theta, st = faithful_solve(
@@ -205,8 +220,48 @@ class Solver:
                 velocities=v,
                 dt=self.dt,
             )
-        with single_threaded_blas():
-            x, theta, ev, st, lam = self._newton(x0, theta_prev, percent)
+        return _drain(self._fast_steps(x0, theta_prev, percent, t0))
+
+    def solve_steps(
+        self,
+        percent: float = 1.0,
+        *,
+        start: np.ndarray | None = None,
+        theta_prev: np.ndarray | None = None,
+    ) -> Generator[SolveProgress, None, FoldResult]:
+        """The fast solve of :meth:`solve`, one Newton iteration per ``next``: yields a :class:`SolveProgress`
+        (iteration, residual, positions in mm) after each, returns the :class:`FoldResult` (``StopIteration.value``).
+
+        For callers that work in slices and may stop between any two iterations (Blender's modal jobs); the result
+        equals :meth:`solve`'s. Only the fast methods step this way (the faithful one is sliced by ``max_steps``)."""
+        if self.method == "faithful":
+            raise ValueError("solve_steps steps the fast solver; slice the faithful one with solve(max_steps=...)")
+        t0 = time.perf_counter()
+        x0, theta_prev = self._start(start, theta_prev, percent)
+        return (yield from self._fast_steps(x0, theta_prev, percent, t0))
+
+    def _start(self, start: np.ndarray | None, theta_prev: np.ndarray | None, percent: float):
+        model = self.model
+        x0 = model.rest.copy() if start is None else model.from_mm(start)
+        if x0.shape != model.rest.shape or not np.all(np.isfinite(x0)):
+            raise SolverError(f"start positions must be a finite ({model.n_nodes}, 3) array, got shape {x0.shape}")
+        if theta_prev is None:
+            theta_prev = self.start_angles(x0, percent)
+        return x0, theta_prev
+
+    def _fast_steps(
+        self, x0: np.ndarray, theta_prev: np.ndarray, percent: float, t0: float
+    ) -> Generator[SolveProgress, None, FoldResult]:
+        model = self.model
+        steps = self._newton(x0, theta_prev, percent)
+        while True:
+            with single_threaded_blas():  # per step: never left on while the caller holds the generator
+                try:
+                    progress = next(steps)
+                except StopIteration as done:
+                    x, theta, ev, st, lam = done.value
+                    break
+            yield SolveProgress(progress.iteration, progress.residual, model.to_mm(progress.x))
         self.lm_lambda = min(max(lam, 1e-6), 1e-2)
         if not np.all(np.isfinite(x)):
             raise SolverError(f"fast solver produced non-finite positions ({st.message})")
@@ -231,7 +286,7 @@ class Solver:
     def _newton(self, x0: np.ndarray, theta_prev: np.ndarray, percent: float):
         s = self.settings
         model = self.model
-        return newton_solve(
+        return newton_steps(
             model,
             x0,
             theta_prev,

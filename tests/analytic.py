@@ -17,6 +17,7 @@ mountain (< 0) toward −z. No pytest in this module: tests import it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -138,8 +139,11 @@ def bisector_case(
     xs = np.linspace(-half_width, half_width, n + 1)
     c = np.column_stack([xs, xs**2 / (2.0 * focal)])
     d = np.diff(c, axis=0)
-    phi = np.arctan2(d[:, 1], d[:, 0])
-    turn = np.angle(np.exp(1j * np.diff(phi)))
+    # libm's atan2 and an exact wrap, not np.arctan2/np.angle(np.exp(1j·x)): their last bit depends on the numpy
+    # version (and CPU), which changed this pattern, and so its meshes, between numpy 1.26 and 2
+    phi = np.fromiter(map(math.atan2, d[:, 1].tolist(), d[:, 0].tolist()), dtype=float, count=len(d))
+    dphi = np.diff(phi)
+    turn = dphi - 2.0 * np.pi * np.round(dphi / (2.0 * np.pi))
     nd = np.concatenate([[phi[0]], phi[:-1] + turn / 2.0, [phi[-1]]]) + np.pi / 2.0
     normals = np.column_stack([np.cos(nd), np.sin(nd)])
     left = c + width_left * normals

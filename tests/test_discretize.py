@@ -328,6 +328,11 @@ def test_any_cubic_meets_interval_and_tolerance(pts, interval, tolerance) -> Non
     assert dist.max() <= tolerance
 
 
+def _cross2(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """z of the cross product of rows of 2-D vectors (numpy 2 deprecates np.cross on 2-D vectors)."""
+    return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     lines=st.lists(st.tuples(coord, coord, coord, coord), min_size=2, max_size=25),
@@ -359,10 +364,10 @@ def test_random_segments_become_a_planar_graph(lines) -> None:
     # no proper crossings between segments that share no vertex
     i, j = np.triu_indices(len(a), 1)
     share = (p.edges[i][:, :, None] == p.edges[j][:, None, :]).any(axis=(1, 2))
-    d1 = np.cross(r[i], a[j] - a[i])
-    d2 = np.cross(r[i], b[j] - a[i])
-    d3 = np.cross(r[j], a[i] - a[j])
-    d4 = np.cross(r[j], b[i] - a[j])
+    d1 = _cross2(r[i], a[j] - a[i])
+    d2 = _cross2(r[i], b[j] - a[i])
+    d3 = _cross2(r[j], a[i] - a[j])
+    d4 = _cross2(r[j], b[i] - a[j])
     margin = 1e-6 * (length[i] * length[j])
     crossing = (d1 * d2 < -(margin**2)) & (d3 * d4 < -(margin**2)) & ~share
     assert not crossing.any()

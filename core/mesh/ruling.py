@@ -67,7 +67,9 @@ class EndpointScorer:
         ends = np.concatenate([segments, segments[:, ::-1]])
         flags = np.concatenate([curve, curve])
         d = self.vertices[ends[:, 1]] - self.vertices[ends[:, 0]]
-        ang = np.arctan2(d[:, 1], d[:, 0])
+        # math.atan2 (libm), as for the edge directions in wedge/_endpoints: numpy's arctan2 differs from it in the
+        # last bit and between numpy versions (SVML in 1.26 on AVX-512), and the wedge search compares the two
+        ang = np.fromiter(map(math.atan2, d[:, 1].tolist(), d[:, 0].tolist()), dtype=float, count=len(d))
         order = np.lexsort((ang, ends[:, 0]))
         ends, flags, ang = ends[order], flags[order], ang[order]
         start = np.searchsorted(ends[:, 0], np.arange(n + 1))

@@ -101,7 +101,8 @@ def _estimate_pieces(seg: CurveSegment, interval: float, tolerance: float) -> fl
     d = np.diff(p, axis=0)
     ds = np.hypot(d[:, 0], d[:, 1])
     length = float(ds.sum())
-    ang = np.arctan2(d[:, 1], d[:, 0])
+    # libm's atan2, not numpy's (whose last bit depends on the numpy version and CPU), so the estimate is the same
+    ang = np.fromiter(map(math.atan2, d[:, 1].tolist(), d[:, 0].tolist()), dtype=float, count=len(d))
     turn = np.abs((np.diff(ang) + np.pi) % (2 * np.pi) - np.pi)
     local = 0.5 * (ds[1:] + ds[:-1])
     by_tol = float(np.sqrt(turn * local / (8.0 * tolerance)).sum())

@@ -66,7 +66,10 @@ class CurveSegment:
             out = (1.0 - t) * p[0] + t * p[1]
         elif self.kind == "cubic":
             s = 1.0 - t
-            out = s**3 * p[0] + 3 * s * s * t * p[1] + 3 * s * t * t * p[2] + t**3 * p[3]
+            # Products only, no `**3`: numpy's power is not correctly rounded and its last bit depends on the numpy
+            # version and the CPU (numpy 1.26 uses SVML on AVX-512, numpy 2 another kernel), which moved polyline
+            # vertices by an ulp and changed meshes between Blender 4.5/5.0 (numpy 1.26) and 5.2 (numpy 2).
+            out = s * s * s * p[0] + 3 * s * s * t * p[1] + 3 * s * t * t * p[2] + t * t * t * p[3]
         elif self.kind == "arc":
             cx, cy, rx, ry, phi, theta0, dtheta = self.arc
             a = theta0 + dtheta * t[:, 0]

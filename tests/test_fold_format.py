@@ -11,7 +11,9 @@ import pytest
 
 from curved_fold.core.io.atomic import atomic_write_bytes, atomic_write_text
 from curved_fold.core.io.fold import (
+    fold_to_mesh,
     fold_to_pattern,
+    folded_to_fold,
     parse_fold,
     read_fold,
     write_folded_fold,
@@ -51,6 +53,14 @@ def assert_same_pattern(a, b) -> None:
     np.testing.assert_array_equal(a.edge_polyline, b.edge_polyline)
     np.testing.assert_array_equal(a.edge_from_curve, b.edge_from_curve)
     assert a.sources == b.sources
+
+
+def assert_same_mesh(a: FoldMesh, b: FoldMesh) -> None:
+    for name in ("vertices", "triangles", "edges", "assignments", "fold_angles", "edge_polyline", "edge_from_curve"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    np.testing.assert_array_equal(a.triangle_face, b.triangle_face)
+    assert a.sources == b.sources and a.mesh_type == b.mesh_type
+    assert [f.tolist() for f in map(np.asarray, a.faces)] == [f.tolist() for f in b.faces]
 
 
 # ------------------------------------------------------------------------------------------------ round trips
@@ -93,7 +103,9 @@ def square_mesh() -> FoldMesh:
     )
 
 
-def test_folded_fold_with_frames_and_simulated_angles(tmp_path: Path) -> None:
+def test_folded_fold_follows_the_spec_and_reads_back(tmp_path: Path) -> None:
+    """Key frame = the flat crease pattern (creasePattern, 2D, numeric target angles); the folded states are
+    file_frames (foldedForm, 3D, their own simulated angles); two of them make an animation."""
     mesh = square_mesh()
     f0 = np.column_stack([mesh.vertices, np.zeros(4)])
     f1 = f0.copy()
@@ -102,20 +114,30 @@ def test_folded_fold_with_frames_and_simulated_angles(tmp_path: Path) -> None:
     out = tmp_path / "folded.fold"
     write_folded_fold(out, mesh, [f1, f0], angles, extra={"curved_fold:percent": 1.0})
     data = json.loads(out.read_text())
-    assert data["frame_classes"] == ["foldedForm"] and data["faces_vertices"] == [[0, 1, 2], [0, 2, 3]]
-    assert data["vertices_coords"][3] == [5, 5, 7.0710678]
-    assert data["curved_fold:fold_angles"] == [None] * 4 + [88.5]
-    assert data["file_frames"][0]["frame_parent"] == 0 and data["file_frames"][0]["frame_inherit"] is True
+    assert data["frame_classes"] == ["creasePattern"] and data["frame_attributes"] == ["2D"]
+    assert data["file_classes"] == ["singleModel", "animation"]
+    assert data["vertices_coords"] == [[0, 0], [10, 0], [10, 10], [0, 10]]
+    assert data["faces_vertices"] == [[0, 1, 2], [0, 2, 3]]
+    assert data["edges_foldAngle"] == [0, 0, 0, 0, 90.0]  # numbers everywhere, 0 for the border
+    frames = data["file_frames"]
+    assert [f["frame_classes"] for f in frames] == [["foldedForm"], ["foldedForm"]]
+    assert frames[0]["vertices_coords"][3] == [5, 5, 7.0710678] and frames[0]["edges_foldAngle"] == [0] * 4 + [88.5]
+    assert frames[0]["frame_parent"] == 0 and frames[0]["frame_inherit"] is True
     assert data["curved_fold:percent"] == 1.0
     doc = read_fold(out)
     assert len(doc.frames) == 2
     np.testing.assert_array_equal(doc.frames[0], f1)
     np.testing.assert_array_equal(doc.frames[1], f0)
     np.testing.assert_array_equal(doc.vertices, mesh.vertices)
-    np.testing.assert_array_equal(doc.frame_fold_angles[1], angles[1])
+    np.testing.assert_array_equal(doc.frame_fold_angles[0], [0] * 4 + [88.5])
     pattern = fold_to_pattern(doc)
     assert pattern.count("V") == 1 and pattern.sources == ["border", "crease"]
     assert pattern.edge_from_curve.tolist() == [False] * 4 + [True]
+    assert np.isnan(pattern.fold_angles[:4]).all()  # the border's 0 is "no angle" again
+    back = fold_to_mesh(doc)
+    assert_same_mesh(mesh, back)
+    single = json.loads(json.dumps(folded_to_fold(mesh, [f1])))
+    assert single["file_classes"] == ["singleModel"] and len(single["file_frames"]) == 1
 
 
 def test_folded_fold_in_cm_and_shape_errors(tmp_path: Path) -> None:
@@ -123,9 +145,11 @@ def test_folded_fold_in_cm_and_shape_errors(tmp_path: Path) -> None:
     f0 = np.column_stack([mesh.vertices, np.ones(4)])
     write_folded_fold(tmp_path / "cm.fold", mesh, [f0], unit="cm")
     data = json.loads((tmp_path / "cm.fold").read_text())
-    assert data["vertices_coords"][1] == [1.0, 0.0, 0.1] and data["frame_unit"] == "cm"
+    assert data["file_frames"][0]["vertices_coords"][1] == [1.0, 0.0, 0.1] and data["frame_unit"] == "cm"
+    assert data["vertices_coords"][1] == [1.0, 0.0]
     doc = read_fold(tmp_path / "cm.fold")  # read back in mm
     np.testing.assert_allclose(doc.frames[0], f0)
+    np.testing.assert_allclose(doc.vertices, mesh.vertices)
     with pytest.raises(PatternError, match=r"frame 0 has shape \(3, 3\), expected \(4, 3\)"):
         write_folded_fold(tmp_path / "x.fold", mesh, [f0[:3]])
     with pytest.raises(PatternError, match="fold angles of frame 0 have 2 entries, mesh has 5 edges"):
@@ -133,6 +157,18 @@ def test_folded_fold_in_cm_and_shape_errors(tmp_path: Path) -> None:
     with pytest.raises(PatternError, match="no frame"):
         write_folded_fold(tmp_path / "x.fold", mesh, [])
     assert not (tmp_path / "x.fold").exists()
+
+
+def test_legacy_folded_file_with_flat_coords_still_reads() -> None:
+    """Files written before the key frame became the crease pattern: folded key frame + curved_fold:flat_coords."""
+    legacy = fold_text(
+        vertices_coords=[[0, 0, 0], [10, 0, 0], [10, 10, 0], [5, 5, 7]],
+        **{"curved_fold:flat_coords": SQUARE["vertices_coords"], "curved_fold:edge_polyline": [0, 0, 0, 0, -1]},
+    )
+    doc = parse_fold(legacy, "old.fold")
+    assert len(doc.frames) == 1 and doc.frames[0][3, 2] == 7
+    p = fold_to_pattern(doc)  # the -1 (triangulation diagonal) is dropped, not "out of range"
+    assert p.n_edges == 4 and p.count("B") == 4
 
 
 # ------------------------------------------------------------------------------------------------ reading
@@ -164,7 +200,7 @@ def test_v10_spelling_3d_flat_and_units() -> None:
 def test_folded_3d_file_without_flat_coordinates() -> None:
     doc = parse_fold(fold_text(vertices_coords=[[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 5]]), "f.fold")
     assert len(doc.frames) == 1 and doc.vertices is None
-    with pytest.raises(PatternError, match="f.fold: a folded \\(3D\\) FOLD file without curved_fold:flat_coords"):
+    with pytest.raises(PatternError, match="f.fold: a folded \\(3D\\) FOLD file without a flat crease pattern"):
         fold_to_pattern(doc)
 
 

@@ -368,12 +368,6 @@ def test_fold_file_not_utf8(tmp_path: Path) -> None:
             None,
             r"segments cross or touch near \(0\.5, 0\.5\) mm",
         ),
-        (
-            [[0, 1], [1, 2], [4, 3], [3, 0], [0, 2]],
-            "BBBBV",
-            [[0, 0], [1, 0], [1, 1], [0, 1], [1, 1]],
-            r"pattern vertex 4 at \[1\.0, 1\.0\] mm is not in the triangulation \(it duplicates another vertex\)",
-        ),
     ],
 )
 def test_fold_file_geometry_that_cannot_be_meshed(tmp_path: Path, edges, assign, coords, message) -> None:

@@ -1,15 +1,19 @@
-"""FOLD files (https://github.com/edemaine/fold, spec 1.1): read crease patterns and folded states, write both.
+"""FOLD files (https://github.com/edemaine/fold, spec 1.1/1.2): read crease patterns and folded states, write both.
 
-Reading (:func:`read_fold`, :func:`fold_to_pattern`): ``vertices_coords`` (2D, or 3D with z ≈ 0 which counts as
-flat; a folded 3D file is read as frames), ``edges_vertices``, ``edges_assignment`` (lowercase accepted),
-``edges_foldAngle`` in degrees (the v1.0 spelling ``edges_foldAngles`` too), ``faces_vertices``, ``file_frames``
-(with ``frame_parent``/``frame_inherit``) and ``frame_unit``. Every problem raises :class:`~.pattern.PatternError`
-naming the array and index.
+Reading (:func:`read_fold`, then :func:`fold_to_pattern` or :func:`fold_to_mesh`): ``vertices_coords`` (2D, or 3D
+lying in one axis plane, which counts as flat: Origami Simulator stores patterns as (x, 0, y); a folded 3D key frame
+is read as a frame), ``edges_vertices``, ``edges_assignment`` (lowercase accepted, FOLD 1.2's ``J`` join edges
+dropped), ``edges_foldAngle`` in degrees (the v1.0 spelling ``edges_foldAngles`` too), ``faces_vertices``,
+``file_frames`` (with ``frame_parent``/``frame_inherit``) and ``frame_unit``. Coincident vertices are merged along
+slits or refused before any triangulation sees them. Every problem raises :class:`~.pattern.PatternError` naming the
+array and index.
 
-Writing is atomic (:mod:`.files`). :func:`write_pattern_fold` stores a discretised pattern (2D, ``creasePattern``,
-mm) with our own ``curved_fold:`` fields (source polyline, from-curve flag, sources), so SVG → pattern → FOLD →
-pattern is lossless (floats are written with ``repr`` precision). :func:`write_folded_fold` stores a folded mesh:
-triangles as faces, 3D positions per frame, flat positions and simulated fold angles as ``curved_fold:`` fields.
+Writing is atomic (:mod:`.atomic`) and follows the spec's conventions (every fold angle a number, 0 for borders and
+flat edges). :func:`write_pattern_fold` stores a discretised pattern (2D, ``creasePattern``, mm) with our own
+``curved_fold:`` fields (source polyline, from-curve flag, sources), so SVG → pattern → FOLD → pattern is lossless
+(floats are written with ``repr`` precision). :func:`write_folded_fold` stores a folded mesh: the crease pattern
+(triangles as faces) as the key frame, each folded state as a ``foldedForm`` frame in ``file_frames``; our own files
+read back to the same mesh (:func:`fold_to_mesh`) and the same pattern (:func:`fold_to_pattern`). See docs/formats.md.
 """
 
 from __future__ import annotations
@@ -29,6 +33,10 @@ from .atomic import atomic_write_text
 
 UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "pt": 25.4 / 72.0, "um": 1e-3, "nm": 1e-6, "unit": 1.0}
 """Millimetres per FOLD ``frame_unit``; ``unit`` (unitless, the FOLD default) is taken as millimetres."""
+
+FOLD_ASSIGNMENTS = (*ASSIGNMENTS, "J")
+"""Assignments a FOLD file may carry: ours plus FOLD 1.2's ``J`` (join: an edge drawn only for modelling, e.g. a
+triangulation diagonal; the faces on both sides are one face, so :func:`fold_to_pattern` drops it)."""
 
 PREFIX = "curved_fold:"
 CREATOR = "Curved Fold (Blender extension)"
@@ -146,8 +154,8 @@ def parse_fold(text: str, source_name: str = "<fold>") -> FoldDocument:
     assignments = []
     for i, a in enumerate(data["edges_assignment"]):
         s = a.upper() if isinstance(a, str) else a
-        if s not in ASSIGNMENTS:
-            raise _fail(src, f"edges_assignment[{i}] = {a!r} is not one of {', '.join(ASSIGNMENTS)}")
+        if s not in FOLD_ASSIGNMENTS:
+            raise _fail(src, f"edges_assignment[{i}] = {a!r} is not one of {', '.join(FOLD_ASSIGNMENTS)}")
         assignments.append(s)
     assign = np.array(assignments, dtype="<U1")
     if "edges_foldAngle" in data:
@@ -161,21 +169,24 @@ def parse_fold(text: str, source_name: str = "<fold>") -> FoldDocument:
     flat_key = PREFIX + "flat_coords"
     frames: list[np.ndarray] = []
     frame_angles: list[np.ndarray | None] = []
-    key_is_flat = coords.shape[1] == 2 or np.all(np.abs(coords[:, 2]) <= 1e-9 * max(extent, 1.0))
+    key_plane = flat_plane(coords, extent)
+    key_is_flat = key_plane is not None
     if flat_key in data:
         flat = _coords(data[flat_key], flat_key, src, scale)
         if len(flat) != n:
             raise _fail(src, f"{flat_key} has {len(flat)} entries but vertices_coords has {n}")
         flat = flat[:, :2]
-    elif key_is_flat:
-        flat = coords[:, :2].copy()
+    elif key_plane is not None:
+        flat = key_plane
     else:
         flat = None
     fa_key = PREFIX + "fold_angles"
 
     def frame_angles_of(fr: dict, where: str) -> np.ndarray | None:
         if fa_key not in fr:
-            return None
+            # a frame's own edges_foldAngle is its folded state's angles (the key frame's are the targets)
+            own = fr.get("edges_foldAngle") if fr is not data else None
+            return _angles(own, where + "edges_foldAngle", src) if isinstance(own, list) and len(own) == m else None
         if not isinstance(fr[fa_key], list) or len(fr[fa_key]) != m:
             got = len(fr[fa_key]) if isinstance(fr[fa_key], list) else "not an array"
             raise _fail(src, f"{where}{fa_key} has {got} entries but edges_vertices has {m}")
@@ -209,7 +220,7 @@ def parse_fold(text: str, source_name: str = "<fold>") -> FoldDocument:
         if fc.shape[1] == 2:
             fc = np.column_stack([fc, np.zeros(n)])
         frames.append(fc)
-        frame_angles.append(frame_angles_of(merged, where))
+        frame_angles.append(frame_angles_of(fr, where) if fa_key not in merged else frame_angles_of(merged, where))
     return FoldDocument(
         data=data,
         vertices=flat,
@@ -237,57 +248,243 @@ def read_fold(path: str | os.PathLike[str]) -> FoldDocument:
     return parse_fold(text, p.name)
 
 
+def flat_plane(coords: np.ndarray, extent: float | None = None) -> np.ndarray | None:
+    """The 2D sheet coordinates of vertex positions that lie in one axis plane, else None (a folded state).
+
+    2D coordinates are returned as they are. 3D coordinates are flat when one axis is constant (to 1e-7 of the
+    extent): z constant gives (x, y); y constant (Origami Simulator stores a crease pattern as (x, 0, y_svg), y up)
+    gives (x, −z), the pattern as drawn in its SVG seen from above; x constant gives (y, z). Each mapping is a
+    rotation of the plane's own axes, so a valley stays a valley.
+    """
+    coords = np.asarray(coords, dtype=np.float64)
+    if coords.ndim != 2 or not len(coords):
+        return np.zeros((0, 2)) if coords.ndim == 2 else None
+    if coords.shape[1] == 2:
+        return coords.copy()
+    span = np.ptp(coords, axis=0)
+    size = float(extent) if extent is not None else float(span.max())
+    tol = 1e-7 * max(size, 1.0)
+    for axis, (a, b, sign) in ((2, (0, 1, 1.0)), (1, (0, 2, -1.0)), (0, (1, 2, 1.0))):
+        if span[axis] <= tol:
+            return np.column_stack([coords[:, a], sign * coords[:, b]])
+    return None
+
+
+def cut_mask(
+    vertices: np.ndarray, edges: np.ndarray, assignments: np.ndarray, faces: list | np.ndarray | None = None
+) -> np.ndarray:
+    """Which border (``B``) edges are really cuts: a border edge with a face on both sides (a slit whose tips were
+    not split) or lying on another border edge (a slit split into two borders, as our meshes store cuts).
+
+    Used to give cuts back their role when reading our folded files and when drawing a mesh's crease pattern."""
+    vertices = np.asarray(vertices, dtype=np.float64)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    border = np.asarray(assignments) == "B"
+    out = np.zeros(len(edges), dtype=bool)
+    if not border.any():
+        return out
+    n = max(len(vertices), 1)
+    pairs = np.sort(edges, axis=1)
+    keys = pairs[:, 0] * n + pairs[:, 1]
+    if faces is not None and len(faces):
+        sides = [np.sort(np.column_stack([f, np.roll(f, -1)]), axis=1) for f in map(np.asarray, faces) if len(f) > 1]
+        if sides:
+            s = np.concatenate(sides)
+            side_keys, counts = np.unique(s[:, 0] * n + s[:, 1], return_counts=True)
+            at = np.clip(np.searchsorted(side_keys, keys), 0, len(side_keys) - 1)
+            out |= border & (side_keys[at] == keys) & (counts[at] >= 2)
+    size = float(np.ptp(vertices, axis=0).max()) if len(vertices) else 1.0
+    grid = np.round(vertices / (1e-9 * (size or 1.0))).astype(np.int64)
+    a, c = grid[edges[:, 0]], grid[edges[:, 1]]
+    swap = (a[:, 0] > c[:, 0]) | ((a[:, 0] == c[:, 0]) & (a[:, 1] > c[:, 1]))
+    ends = np.where(swap[:, None], np.hstack([c, a]), np.hstack([a, c]))
+    b = np.flatnonzero(border)
+    _, inverse, counts = np.unique(ends[b], axis=0, return_inverse=True, return_counts=True)
+    out[b[counts[inverse.reshape(-1)] > 1]] = True
+    return out
+
+
+def _merge_coincident(
+    src: str, vertices: np.ndarray, edges: np.ndarray, columns: dict[str, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Merge vertices that coincide (to 1e-9 of the extent) before any triangulation sees them.
+
+    Coincident vertices are legitimate only along a slit: a cut split into two border edges (as in our own folded
+    meshes, and as the FOLD spec lets a ``C`` edge be stored). Such border pairs become one ``C`` edge. Anything
+    else (an edge shrinking to a point, two creases on one segment, no border left, as in a flat-folded state)
+    raises PatternError naming the vertices: triangle libraries crash or loop on such input.
+    """
+    n = len(vertices)
+    if n < 2:
+        return vertices, edges, columns
+    size = float(np.ptp(vertices, axis=0).max()) or 1.0
+    keys = np.round(vertices / (1e-9 * size)).astype(np.int64)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    if len(first) == n:
+        return vertices, edges, columns
+    dup = int(np.flatnonzero(first[inverse] != np.arange(n))[0])
+    twin = int(first[inverse[dup]])
+    where = f"vertices {twin} and {dup} coincide at ({vertices[dup, 0]:.6g}, {vertices[dup, 1]:.6g})"
+    hint = "a crease pattern needs distinct vertices; is this a folded state? Export its crease pattern instead"
+    assign = columns["assignments"]
+    used = np.zeros(n, dtype=bool)
+    used[first] = True
+    new_index = (np.cumsum(used) - 1)[first[inverse]]  # every vertex → its merged vertex, original order kept
+    merged = np.sort(new_index[edges], axis=1)
+    point = merged[:, 0] == merged[:, 1]
+    if point.any():
+        k = int(np.flatnonzero(point)[0])
+        raise PatternError(f"{src}: {where}; edge {k} {edges[k].tolist()} shrinks to a point ({hint})")
+    _, first_e, inv_e, counts = np.unique(merged, axis=0, return_index=True, return_inverse=True, return_counts=True)
+    inv_e = inv_e.reshape(-1)
+    repeated = counts[inv_e] > 1
+    slit = np.isin(assign, ("B", "C"))
+    if np.any(repeated & ~slit):
+        k = int(np.flatnonzero(repeated & ~slit)[0])
+        raise PatternError(
+            f"{src}: {where}; edge {k} ({assign[k]}) then lies on another edge, which only two border edges of a "
+            f"slit may do ({hint})"
+        )
+    keep = np.zeros(len(edges), dtype=bool)
+    keep[first_e] = True
+    out = {name: np.asarray(col)[keep].copy() for name, col in columns.items()}
+    out["assignments"][repeated[keep]] = "C"
+    if not np.any(out["assignments"] == "B"):
+        raise PatternError(f"{src}: {where}; every border edge then lies on another, so no border is left ({hint})")
+    return vertices[used], merged[keep], out
+
+
+def _drop_unused_vertices(vertices: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    used = np.zeros(len(vertices), dtype=bool)
+    used[edges.reshape(-1)] = True
+    if used.all():
+        return vertices, edges
+    return vertices[used], (np.cumsum(used) - 1)[edges]
+
+
+def _target_angles(doc: FoldDocument) -> np.ndarray:
+    """Target fold angles as our models keep them: ``nan`` for "none given" (``curved_fold:angle_unset``) and
+    for borders, cuts and undriven hinges written as the spec's 0."""
+    angles = doc.fold_angles.copy()
+    angles[np.isin(doc.assignments, ("B", "C", "U", "J")) & (angles == 0)] = np.nan
+    unset = doc.data.get(PREFIX + "angle_unset")
+    if isinstance(unset, list) and len(unset) == len(angles):
+        angles[np.array(unset, dtype=bool)] = np.nan
+    return angles
+
+
 def fold_to_pattern(doc: FoldDocument, source: str | None = None) -> CreasePattern:
     """The flat crease pattern of a FOLD document (``source`` names it in ``sources`` and messages).
 
     ``curved_fold:`` fields written by :func:`write_pattern_fold` restore the polyline indices, from-curve flags and
-    source names exactly; plain FOLD files get one polyline per edge named ``"<file> edge i"``.
+    source names exactly; plain FOLD files get one polyline per edge named ``"<file> edge i"``. Edges that are not
+    part of the drawn pattern are dropped: ``J`` (join) edges and, in our folded files, the triangulation diagonals
+    (``curved_fold:edge_polyline`` −1). Coincident vertices are merged along slits or refused
+    (:func:`_merge_coincident`), so the triangulation never sees them.
     """
     src = source or doc.source_name
     if doc.vertices is None:
         raise PatternError(
-            f"{src}: a folded (3D) FOLD file without {PREFIX}flat_coords has no crease pattern to read; "
-            "export the crease pattern (2D) instead"
+            f"{src}: a folded (3D) FOLD file without a flat crease pattern (a 2D key frame, or "
+            f"{PREFIX}flat_coords) has no crease pattern to read; export the crease pattern (2D) instead"
         )
     data = doc.data
     m = len(doc.edges)
     if PREFIX + "edge_polyline" in data:
-        poly = np.array(data[PREFIX + "edge_polyline"], dtype=np.int64)
+        poly = np.array(data[PREFIX + "edge_polyline"], dtype=np.int64).reshape(-1)
         sources = [str(s) for s in data.get(PREFIX + "sources", [])]
-        if len(poly) and sources and (poly.min() < 0 or poly.max() >= len(sources)):
-            bad = int(np.flatnonzero((poly < 0) | (poly >= len(sources)))[0])
+        drawn = poly >= 0
+        if len(poly) and sources and poly.max() >= len(sources):
+            bad = int(np.flatnonzero(poly >= len(sources))[0])
             raise PatternError(
                 f"{src}: {PREFIX}edge_polyline[{bad}] = {poly[bad]} out of range ({len(sources)} sources)"
             )
         if not sources:
-            sources = [f"{src} polyline {k}" for k in range(int(poly.max()) + 1 if len(poly) else 0)]
+            sources = [f"{src} polyline {k}" for k in range(int(poly.max()) + 1 if drawn.any() else 0)]
     else:
         poly = np.arange(m)
+        drawn = np.ones(m, dtype=bool)
         sources = [f"{src} edge {k}" for k in range(m)]
-    curve = np.array(data.get(PREFIX + "edge_from_curve", [False] * m), dtype=bool)
+    keep = drawn & (doc.assignments != "J")
+    curve = np.array(data.get(PREFIX + "edge_from_curve", [False] * m), dtype=bool).reshape(-1)
+    columns = {
+        "assignments": doc.assignments[keep],
+        "fold_angles": _target_angles(doc)[keep],
+        "edge_polyline": poly[keep],
+        "edge_from_curve": curve[keep],
+    }
+    columns["assignments"][cut_mask(doc.vertices, doc.edges, doc.assignments, doc.faces)[keep]] = "C"
+    vertices, edges = doc.vertices, doc.edges[keep]
+    if not keep.all():
+        vertices, edges = _drop_unused_vertices(vertices, edges)
+    vertices, edges, columns = _merge_coincident(src, vertices, edges, columns)
     pattern = CreasePattern(
-        vertices=doc.vertices,
-        edges=doc.edges,
-        assignments=doc.assignments,
-        fold_angles=doc.fold_angles,
-        edge_polyline=poly,
-        edge_from_curve=curve,
+        vertices=vertices,
+        edges=edges,
         sources=sources,
         warnings=list(doc.warnings) + [str(w) for w in data.get(PREFIX + "warnings", [])],
+        **columns,
     )
     pattern.validate()
     return pattern
 
 
-def _angles_json(a: np.ndarray) -> list[float | None]:
-    return [None if not math.isfinite(x) else float(x) for x in np.asarray(a, dtype=float).tolist()]
+def fold_to_mesh(doc: FoldDocument, source: str | None = None) -> FoldMesh:
+    """The triangle mesh of a FOLD file whose faces are triangles (our folded files): flat positions, triangles,
+    edges, assignments, target angles and our ``curved_fold:`` fields as written by :func:`write_folded_fold`, so
+    a folded file reads back to the mesh it was written from. Raises PatternError otherwise."""
+    src = source or doc.source_name
+    if doc.vertices is None:
+        raise PatternError(f"{src}: no flat crease pattern in the file, so no mesh to rebuild")
+    tris = doc.faces
+    if not tris or any(len(f) != 3 for f in tris):
+        raise PatternError(f"{src}: faces_vertices are not all triangles; fold the file to get a mesh")
+    data, m = doc.data, len(doc.edges)
+
+    def column(name: str, default: Any, dtype: Any) -> np.ndarray:
+        value = data.get(PREFIX + name, default)
+        arr = np.asarray(value, dtype=dtype).reshape(-1)
+        if len(arr) != len(default):
+            raise PatternError(f"{src}: {PREFIX}{name} has {len(arr)} entries, expected {len(default)}")
+        return arr
+
+    angles = _target_angles(doc)
+    angles[np.isin(doc.assignments, ("B", "U"))] = np.nan
+    angles[(doc.assignments == "F") & ~np.isfinite(angles)] = 0.0
+    faces = data.get(PREFIX + "pattern_faces", [])
+    return FoldMesh(
+        vertices=doc.vertices,
+        triangles=tris,
+        edges=np.sort(doc.edges, axis=1),
+        assignments=np.where(doc.assignments == "J", "F", doc.assignments),
+        fold_angles=angles,
+        edge_from_curve=column("edge_from_curve", [False] * m, bool),
+        edge_polyline=column("edge_polyline", list(range(m)), np.int64),
+        triangle_face=column("triangle_face", [0] * len(tris), np.int64),
+        faces=[np.asarray(f, dtype=np.int64) for f in faces] if isinstance(faces, list) else [],
+        mesh_type=str(data.get(PREFIX + "mesh_type", "ruling")),
+        sources=[str(s) for s in data.get(PREFIX + "sources", [])],
+    )
 
 
-def _header(frame_class: str, dims: str, unit: str) -> dict[str, Any]:
+def _angles_json(a: np.ndarray, assignments: np.ndarray | None = None) -> list[float]:
+    """Fold angles as the spec's numbers: an angle not given (``nan``) is 0 (flat, border, unassigned), or ±180
+    for a mountain/valley (Origami Simulator's reading of a crease without an angle)."""
+    a = np.asarray(a, dtype=float).copy()
+    missing = ~np.isfinite(a)
+    a[missing] = 0.0
+    if assignments is not None:
+        a[missing & (assignments == "M")] = -180.0
+        a[missing & (assignments == "V")] = 180.0
+    return a.tolist()
+
+
+def _header(frame_class: str, dims: str, unit: str, animation: bool = False) -> dict[str, Any]:
     return {
         "file_spec": 1.1,
         "file_creator": CREATOR,
-        "file_classes": ["singleModel"],
+        "file_classes": ["singleModel", "animation"] if animation else ["singleModel"],
         "frame_classes": [frame_class],
         "frame_attributes": [dims],
         "frame_unit": unit,
@@ -295,21 +492,27 @@ def _header(frame_class: str, dims: str, unit: str) -> dict[str, Any]:
 
 
 def pattern_to_fold(pattern: CreasePattern) -> dict[str, Any]:
-    """The FOLD object :func:`write_pattern_fold` writes."""
+    """The FOLD object :func:`write_pattern_fold` writes. Every fold angle is a number; creases without one are
+    written as ±180 and listed in ``curved_fold:angle_unset`` so that reading back restores "none given"."""
     pattern.validate()
     data = _header("creasePattern", "2D", "mm")
+    if np.any(pattern.assignments == "C"):
+        data["frame_attributes"].append("cuts")
+    unset = np.isin(pattern.assignments, ("M", "V")) & ~np.isfinite(pattern.fold_angles)
     data.update(
         {
             "vertices_coords": pattern.vertices.tolist(),
             "edges_vertices": pattern.edges.tolist(),
             "edges_assignment": pattern.assignments.tolist(),
-            "edges_foldAngle": _angles_json(pattern.fold_angles),
+            "edges_foldAngle": _angles_json(pattern.fold_angles, pattern.assignments),
             PREFIX + "edge_polyline": pattern.edge_polyline.tolist(),
             PREFIX + "edge_from_curve": pattern.edge_from_curve.tolist(),
             PREFIX + "sources": list(pattern.sources),
             PREFIX + "warnings": list(pattern.warnings),
         }
     )
+    if unset.any():
+        data[PREFIX + "angle_unset"] = unset.tolist()
     return data
 
 
@@ -325,7 +528,13 @@ def folded_to_fold(
     unit: str = "mm",
     extra: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """The FOLD object :func:`write_folded_fold` writes (checks shapes, raising PatternError)."""
+    """The FOLD object :func:`write_folded_fold` writes (checks shapes, raising PatternError).
+
+    The spec's conventions, so that Origami Simulator and FOLD viewers open it flat and fold it: the key frame is
+    the crease pattern (2D, ``creasePattern``, the mesh's triangles as faces, target fold angles, diagonals ``F``
+    at 0); every folded state is a ``file_frames`` entry (``foldedForm``, 3D, inheriting the key frame, its own
+    simulated ``edges_foldAngle``); several frames make the file an ``animation``.
+    """
     n, e = mesh.n_vertices, len(mesh.edges)
     if not frames:
         raise PatternError("folded FOLD export: no frame to write")
@@ -340,7 +549,7 @@ def folded_to_fold(
         if not np.isfinite(f).all():
             raise PatternError(f"folded FOLD export: frame {k} has non-finite positions")
         pos.append((f * scale).tolist())
-    angles: list[list[float | None]] | None = None
+    angles: list[list[float]] | None = None
     if fold_angles is not None:
         if len(fold_angles) != len(frames):
             raise PatternError(f"folded FOLD export: {len(fold_angles)} fold-angle arrays for {len(frames)} frames")
@@ -352,36 +561,34 @@ def folded_to_fold(
                     f"folded FOLD export: fold angles of frame {k} have {len(a)} entries, mesh has {e} edges"
                 )
             angles.append(_angles_json(a))
-    data = _header("foldedForm", "3D", unit)
+    data = _header("creasePattern", "2D", unit, animation=len(pos) > 1)
     data.update(
         {
-            "vertices_coords": pos[0],
+            "vertices_coords": (mesh.vertices * scale).tolist(),
             "edges_vertices": mesh.edges.tolist(),
             "edges_assignment": mesh.assignments.tolist(),
-            "edges_foldAngle": _angles_json(mesh.fold_angles),
+            "edges_foldAngle": _angles_json(mesh.fold_angles, mesh.assignments),
             "faces_vertices": mesh.triangles.tolist(),
-            PREFIX + "flat_coords": (mesh.vertices * scale).tolist(),
             PREFIX + "edge_polyline": mesh.edge_polyline.tolist(),
             PREFIX + "edge_from_curve": mesh.edge_from_curve.tolist(),
             PREFIX + "sources": list(mesh.sources),
             PREFIX + "mesh_type": mesh.mesh_type,
+            PREFIX + "triangle_face": mesh.triangle_face.tolist(),
+            PREFIX + "pattern_faces": [np.asarray(f).tolist() for f in mesh.faces],
         }
     )
-    if angles is not None:
-        data[PREFIX + "fold_angles"] = angles[0]
-    if len(pos) > 1:
-        data["file_frames"] = []
-        for k in range(1, len(pos)):
-            fr: dict[str, Any] = {
-                "frame_classes": ["foldedForm"],
-                "frame_attributes": ["3D"],
-                "frame_parent": 0,
-                "frame_inherit": True,
-                "vertices_coords": pos[k],
-            }
-            if angles is not None:
-                fr[PREFIX + "fold_angles"] = angles[k]
-            data["file_frames"].append(fr)
+    data["file_frames"] = []
+    for k, p in enumerate(pos):
+        fr: dict[str, Any] = {
+            "frame_classes": ["foldedForm"],
+            "frame_attributes": ["3D"],
+            "frame_parent": 0,
+            "frame_inherit": True,
+            "vertices_coords": p,
+        }
+        if angles is not None:
+            fr["edges_foldAngle"] = angles[k]
+        data["file_frames"].append(fr)
     if extra:
         data.update(extra)
     return data
@@ -395,8 +602,8 @@ def write_folded_fold(
     unit: str = "mm",
     extra: dict[str, Any] | None = None,
 ) -> Path:
-    """Write a folded mesh atomically: triangles as faces, ``frames[0]`` as ``vertices_coords`` (3D), the other
-    frames in ``file_frames``, flat positions in ``curved_fold:flat_coords``, simulated angles (one array per frame,
-    degrees) in ``curved_fold:fold_angles``. ``extra`` entries are added at the top level (prefix your keys)."""
+    """Write a folded mesh atomically (:func:`folded_to_fold`): the crease pattern as the key frame, ``frames``
+    (mm) as ``file_frames``, ``fold_angles`` (degrees, one array per frame, simulated) as each frame's
+    ``edges_foldAngle``. ``extra`` entries are added at the top level (prefix your keys)."""
     data = folded_to_fold(mesh, frames, fold_angles, unit, extra)
     return atomic_write_text(path, json.dumps(data, allow_nan=False) + "\n")

@@ -1,0 +1,196 @@
+"""FOLD files from and for other tools: our folded files read back, Origami Simulator's files, FOLD 1.2 ``J`` edges,
+coincident vertices (the FOLD library's own ``diagonal-folded.fold``) refused with exit 2 before triangulation."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.io.fold import (
+    flat_plane,
+    fold_to_mesh,
+    fold_to_pattern,
+    parse_fold,
+    read_fold,
+    write_folded_fold,
+)
+from curved_fold.core.io.reader import read_pattern
+from curved_fold.core.pattern.model import PatternError
+from curved_fold.core.pipeline import fold_pattern
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+OS = FIXTURES / "origami-simulator"
+REPO = Path(__file__).resolve().parents[1]
+
+SLIT_SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="60mm" viewBox="0 0 100 60">
+<polygon stroke="#000000" fill="none" points="0,0 100,0 100,60 0,60"/>
+<line stroke="#00ff00" x1="30" y1="30" x2="70" y2="30"/>
+<line stroke="#0000ff" opacity="0.5" x1="50" y1="0" x2="50" y2="20"/>
+<line stroke="#ff0000" opacity="0.5" x1="50" y1="40" x2="50" y2="60"/>
+</svg>
+"""
+
+
+def _same_mesh(a, b) -> None:
+    for name in ("vertices", "triangles", "edges", "assignments", "fold_angles", "edge_polyline", "edge_from_curve"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    np.testing.assert_array_equal(a.triangle_face, b.triangle_face)
+    assert a.sources == b.sources and a.mesh_type == b.mesh_type
+
+
+@pytest.mark.parametrize("svg", ["wavy_pleats.svg", "slit"])
+def test_our_folded_file_reads_back_to_the_same_mesh_and_pattern(svg: str, tmp_path: Path) -> None:
+    if svg == "slit":
+        (tmp_path / "slit.svg").write_text(SLIT_SVG)
+        path = tmp_path / "slit.svg"
+    else:
+        path = OS / svg
+    pattern = read_pattern(path)
+    run = fold_pattern(pattern)
+    out = tmp_path / "folded.fold"
+    half = 0.5 * (run.mesh.vertices_3d + run.result.positions)
+    write_folded_fold(out, run.mesh, [half, run.result.positions], [run.result.fold_angles] * 2)
+    doc = read_fold(out)
+    # every frame back, in order
+    assert len(doc.frames) == 2
+    np.testing.assert_allclose(doc.frames[1], run.result.positions, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(doc.frames[0], half, rtol=0, atol=1e-12)
+    _same_mesh(run.mesh, fold_to_mesh(doc))
+    # the crease pattern comes back (diagonals dropped, slits merged back into cuts) and folds to the same mesh
+    again = fold_to_pattern(doc)
+    assert again.n_edges == pattern.n_edges and again.n_vertices == pattern.n_vertices
+    for a in "BMVCFU":
+        assert again.count(a) == pattern.count(a), a
+    rerun = fold_pattern(again)
+    assert rerun.mesh.n_faces == run.mesh.n_faces and len(rerun.mesh.edges) == len(run.mesh.edges)
+    np.testing.assert_allclose(np.sort(rerun.mesh.vertices, axis=0), np.sort(run.mesh.vertices, axis=0))
+
+
+def _origami_simulator_fold(pattern, plane: str) -> dict:
+    """A crease pattern as Origami Simulator's saveFOLD writes it (reference §5.7): 3D, the sheet at y = 0 with the
+    SVG's (x, y_down) as (x, 0, y), ``foldedForm``, unit ``"unit"``, cuts written as borders, target angles."""
+    x, y_up = pattern.vertices[:, 0], pattern.vertices[:, 1]
+    if plane == "y":
+        coords = np.column_stack([x, np.zeros_like(x), -y_up])
+    elif plane == "x":
+        coords = np.column_stack([np.full_like(x, 3.0), x, y_up])
+    else:
+        coords = np.column_stack([x, y_up, np.full_like(x, -2.0)])
+    return {
+        "file_spec": 1.1,
+        "file_creator": "Origami Simulator: http://git.amandaghassaei.com/OrigamiSimulator/",
+        "file_classes": ["singleModel"],
+        "frame_classes": ["foldedForm"],
+        "frame_attributes": ["3D"],
+        "frame_unit": "unit",
+        "vertices_coords": coords.tolist(),
+        "edges_vertices": pattern.edges.tolist(),
+        "edges_assignment": np.where(pattern.assignments == "C", "B", pattern.assignments).tolist(),
+        "edges_foldAngle": np.nan_to_num(pattern.fold_angles).tolist(),
+    }
+
+
+@pytest.mark.parametrize("plane", ["y", "x", "z"])
+def test_origami_simulator_flat_3d_files_read_as_the_pattern_and_fold(plane: str) -> None:
+    pattern = read_pattern(OS / "curvedPleatSimple.svg")
+    doc = parse_fold(json.dumps(_origami_simulator_fold(pattern, plane)), "os.fold")
+    assert doc.frames == []  # flat, whatever its class says
+    back = fold_to_pattern(doc)
+    np.testing.assert_allclose(back.vertices, pattern.vertices, atol=1e-12)  # same orientation: M/V keep their sense
+    np.testing.assert_array_equal(back.assignments, pattern.assignments)
+    ours, theirs = fold_pattern(pattern), fold_pattern(back)
+    assert theirs.result.converged and theirs.mesh.n_faces == ours.mesh.n_faces
+    np.testing.assert_allclose(theirs.result.positions, ours.result.positions, atol=1e-6 * pattern.size)
+
+
+def test_flat_plane_detection() -> None:
+    folded = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.3]])
+    assert flat_plane(folded) is None
+    np.testing.assert_array_equal(flat_plane(np.array([[1, 0, 2], [3, 0, 4], [5, 0, 1]])), [[1, -2], [3, -4], [5, -1]])
+
+
+def test_join_edges_are_dropped_and_their_faces_merge() -> None:
+    data = {
+        "file_spec": 1.2,
+        "frame_attributes": ["2D", "joins"],
+        "vertices_coords": [[0, 0], [10, 0], [10, 10], [0, 10], [5, 0], [5, 10], [20, 20]],
+        "edges_vertices": [[0, 4], [4, 1], [1, 2], [2, 5], [5, 3], [3, 0], [4, 5], [0, 2], [2, 6]],
+        "edges_assignment": ["B", "B", "B", "B", "B", "B", "V", "J", "J"],
+        "edges_foldAngle": [0, 0, 0, 0, 0, 0, 90, 0, 0],
+    }
+    p = fold_to_pattern(parse_fold(json.dumps(data), "j.fold"))
+    assert p.n_edges == 7 and "J" not in p.assignments.tolist()
+    assert p.n_vertices == 6  # vertex 6 was only on a join edge
+    assert p.fold_angles[6] == 90 and np.isnan(p.fold_angles[:6]).all()
+    run = fold_pattern(p)
+    assert run.result.converged and 85 < run.result.fold_angles[np.flatnonzero(run.mesh.assignments == "V")[0]] < 95
+    bad = dict(data, edges_assignment=["B"] * 6 + ["V", "X", "J"])
+    with pytest.raises(PatternError, match=r"edges_assignment\[7\] = 'X' is not one of B, M, V, F, U, C, J"):
+        parse_fold(json.dumps(bad), "j.fold")
+
+
+def test_coincident_vertices_are_merged_or_refused_before_triangulation() -> None:
+    data = {
+        "vertices_coords": [[0, 0], [10, 0], [10, 10], [0, 10], [10, 0]],
+        "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2], [4, 3]],
+        "edges_assignment": ["B", "B", "B", "B", "V", "M"],
+    }
+    p = fold_to_pattern(parse_fold(json.dumps(data), "c.fold"))  # a vertex drawn twice: merged
+    assert p.n_vertices == 4 and p.edges[5].tolist() == [1, 3]
+    data["edges_vertices"][5] = [4, 2]  # now a crease lies on the border: refused with both vertices named
+    with pytest.raises(PatternError, match=r"c.fold: vertices 1 and 4 coincide at \(10, 0\); edge 5 \(M\) then lies"):
+        fold_to_pattern(parse_fold(json.dumps(data), "c.fold"))
+
+
+def test_a_vertex_written_twice_merges_in_the_reader_and_the_triangulation_still_refuses_it_raw() -> None:
+    """A FOLD file's duplicate vertex is merged by the reader (so it folds); a pattern handed over with the duplicate
+    still gets the triangulation's own one-line refusal (moved here from test_robust_inputs)."""
+    from curved_fold.core.pattern.model import CreasePattern
+
+    data = {
+        "vertices_coords": [[0, 0], [1, 0], [1, 1], [0, 1], [1, 1]],
+        "edges_vertices": [[0, 1], [1, 2], [4, 3], [3, 0], [0, 2]],
+        "edges_assignment": ["B", "B", "B", "B", "V"],
+    }
+    p = fold_to_pattern(parse_fold(json.dumps(data), "sq.fold"))
+    assert p.n_vertices == 4 and p.edges[2].tolist() == [2, 3]
+    assert fold_pattern(p, angle=90).result.converged
+    raw = CreasePattern(
+        vertices=data["vertices_coords"],
+        edges=data["edges_vertices"],
+        assignments=data["edges_assignment"],
+        fold_angles=[np.nan] * 4 + [90.0],
+        edge_polyline=range(5),
+        edge_from_curve=[False] * 5,
+    )
+    with pytest.raises(PatternError, match=r"triangulation: pattern vertex 4 at \[1\.0, 1\.0\] mm is not in the"):
+        fold_pattern(raw, angle=90)
+
+
+@pytest.mark.parametrize("mesh", ["ruling", "cdt", "earcut"])
+def test_fold_library_flat_folded_example_exits_2_with_one_line(mesh: str, tmp_path: Path) -> None:
+    """The FOLD library's ``diagonal-folded.fold`` (a flat-folded state: vertices coincide) once crashed the process
+    inside the triangulation (exit 139); now the reader refuses it with one line and exit code 2."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "curved_fold", "fold", str(FIXTURES / "fold" / "diagonal-folded.fold")]
+        + ["--out", str(tmp_path / "o.fold"), "--mesh", mesh],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=REPO,
+    )
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "vertices 0 and 2 coincide" in lines[0] and "Traceback" not in proc.stderr
+    assert not (tmp_path / "o.fold").exists()
+
+
+def test_fold_library_crease_pattern_example_folds(tmp_path: Path) -> None:
+    doc = read_fold(FIXTURES / "fold" / "diagonal-cp.fold")
+    run = fold_pattern(fold_to_pattern(doc), percent=0.5)
+    assert run.result.converged and run.mesh.n_faces == 2

@@ -1,7 +1,7 @@
 """Export operators: the folded mesh (OBJ, STL, glTF with the baked animation, FOLD with one frame per baked frame,
-.blend) through Blender's own exporters or the FOLD writer, and the flat crease pattern as SVG in Origami
-Simulator's convention (for plotters and laser cutters); plus File ▸ Export entries. The user's scene is never
-changed: exports run in a temporary scene (``scene.export``)."""
+.blend) through Blender's own exporters or the FOLD writer, with the object's modifiers (Solidify) applied, and the
+flat crease pattern as SVG in Origami Simulator's convention (for plotters and laser cutters); plus File ▸ Export
+entries. The user's scene is never changed: exports run in a temporary scene (``scene.export``)."""
 
 from __future__ import annotations
 
@@ -17,9 +17,9 @@ from . import _common
 
 FORMATS = (
     ("GLB", "glTF Binary (.glb)", "Folded mesh; with a bake, morph targets and the fold animation", ".glb"),
-    ("OBJ", "Wavefront (.obj)", "Folded mesh at the current frame", ".obj"),
-    ("STL", "STL (.stl)", "Folded mesh at the current frame (3D printing)", ".stl"),
-    ("FOLD", "FOLD (.fold)", "Folded state, one FOLD frame per baked frame, simulated fold angles", ".fold"),
+    ("OBJ", "Wavefront (.obj)", "Folded mesh at the current frame, with modifiers and flat-pattern UVs", ".obj"),
+    ("STL", "STL (.stl)", "Folded mesh at the current frame with modifiers (Solidify), millimetres by default", ".stl"),
+    ("FOLD", "FOLD (.fold)", "Crease pattern plus one folded FOLD frame per baked frame (simulated angles)", ".fold"),
     ("BLEND", "Blender (.blend)", "The folded object with its baked shape keys", ".blend"),
 )
 _EXT = {f[0]: f[3] for f in FORMATS}
@@ -44,11 +44,27 @@ def folded_frames(ob: bpy.types.Object) -> tuple[list[int], list[np.ndarray]]:
 
 
 def current_frame_positions(ob: bpy.types.Object, context) -> np.ndarray:
-    """Evaluated positions (mm) of ``ob`` at the current frame (shape-key mix applied)."""
-    ev = ob.evaluated_get(context.evaluated_depsgraph_get())
-    co = np.empty(3 * len(ev.data.vertices), dtype=np.float32)
-    ev.data.attributes["position"].data.foreach_get("vector", co)
-    return co.reshape(-1, 3).astype(np.float64) * mesh_object.mm_per_unit(context.scene)
+    """Positions (mm) of ``ob``'s own vertices at the current frame: the shape-key mix (animated values) without
+    the modifiers, which the export applies itself (``export.export_folded_file(modifiers_from=ob)``)."""
+    me = ob.data
+    n = len(me.vertices)
+    co = np.empty(3 * n, dtype=np.float32)
+    me.attributes["position"].data.foreach_get("vector", co)
+    out = co.reshape(-1, 3).astype(np.float64)
+    keys = me.shape_keys
+    if keys is not None and keys.use_relative and len(keys.key_blocks) > 1:
+        evaluated = keys.evaluated_get(context.evaluated_depsgraph_get())
+
+        def key_co(kb) -> np.ndarray:
+            buf = np.empty(3 * n, dtype=np.float32)
+            kb.points.foreach_get("co", buf)
+            return buf.reshape(-1, 3).astype(np.float64)
+
+        out = key_co(keys.reference_key)
+        for kb, ev in zip(keys.key_blocks[1:], evaluated.key_blocks[1:], strict=True):
+            if not kb.mute and ev.value != 0.0:
+                out += ev.value * (key_co(kb) - key_co(kb.relative_key))
+    return out * mesh_object.mm_per_unit(context.scene)
 
 
 class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
@@ -65,6 +81,15 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
     filename_ext = ".glb"
     filter_glob: StringProperty(default="*.glb;*.obj;*.stl;*.fold;*.blend", options={"HIDDEN"})
     file_format: EnumProperty(name="Format", items=[f[:3] for f in FORMATS], default="GLB")
+    unit: EnumProperty(
+        name="Units",
+        items=(
+            ("AUTO", "Automatic", "Millimetres for STL (what slicers assume), metres for OBJ; glTF is always metres"),
+            ("MM", "Millimetres", "STL/OBJ lengths in millimetres"),
+            ("M", "Metres", "STL/OBJ lengths in metres (Blender units)"),
+        ),
+        default="AUTO",
+    )
 
     @classmethod
     def poll(cls, context):
@@ -85,9 +110,11 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
             mesh = mesh_object.read_fold_mesh(ob)
             frames, positions = folded_frames(ob)
             suffix = _EXT[self.file_format]
-            kwargs = {"name": ob.name, "fps": context.scene.render.fps}
+            kwargs = {"name": ob.name, "fps": context.scene.render.fps, "modifiers_from": ob}
             if suffix in (".obj", ".stl"):
                 positions = [current_frame_positions(ob, context)]
+                if self.unit != "AUTO":
+                    kwargs["unit"] = self.unit.lower()
             elif suffix == ".fold":
                 from ..core.metrics import measures as metrics
 

@@ -69,6 +69,94 @@ def temporary_scene(name: str = "Curved Fold Export") -> Iterator[bpy.types.Scen
         bpy.data.scenes.remove(scene)
 
 
+UNITS = {"m": 1.0, "mm": 1000.0}
+"""File length units the mesh exporters offer: file units per metre (Blender units of a unit-scale-1 scene)."""
+
+DEFAULT_UNIT = {".stl": "mm", ".obj": "m", ".glb": "m", ".gltf": "m", ".blend": "m"}
+"""STL in millimetres (what slicers assume); glTF must be metres; OBJ keeps Blender's metres unless asked."""
+
+PAPER_RGBA = (0.93, 0.91, 0.86, 1.0)
+"""Base colour of the exported paper material (an off-white sheet)."""
+
+
+def flat_uv(mesh: FoldMesh) -> np.ndarray:
+    """Per-vertex texture coordinates from the flat crease pattern: shifted to the lower-left corner and divided by
+    the larger extent (Origami Simulator's OBJ convention), so an image printed on the sheet follows the fold and
+    keeps its aspect ratio. Shape ``(n, 2)``, in [0, 1]."""
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    lo = v.min(axis=0)
+    extent = float(np.ptp(v, axis=0).max()) or 1.0
+    return (v - lo) / extent
+
+
+def _paper_surface(ob: bpy.types.Object, mesh: FoldMesh) -> None:
+    """Give the export object UVs from the flat pattern and a double-sided paper material (glTF's default material
+    is single-sided: flaps seen from below would vanish)."""
+    me = ob.data
+    loops = np.empty(len(me.loops), dtype=np.int64)
+    me.loops.foreach_get("vertex_index", loops)
+    uv = me.uv_layers.new(name="UVMap")
+    uv.data.foreach_set("uv", flat_uv(mesh)[loops].astype(np.float32).ravel())
+    mat = bpy.data.materials.new("Paper")
+    if mat.node_tree is None:  # Blender 4.x; 5.x materials always have nodes
+        mat.use_nodes = True
+    mat.use_backface_culling = False
+    mat.diffuse_color = PAPER_RGBA
+    bsdf = next((n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled"), None)
+    if bsdf is not None:
+        bsdf.inputs["Base Color"].default_value = PAPER_RGBA
+        bsdf.inputs["Roughness"].default_value = 0.9
+    me.materials.append(mat)
+
+
+def _copy_modifiers(source: bpy.types.Object, target: bpy.types.Object) -> None:
+    """Copy ``source``'s enabled modifiers (Solidify for thickness, ...) with their settings onto ``target``."""
+    for mod in source.modifiers:
+        if not (mod.show_viewport or mod.show_render):
+            continue
+        new = target.modifiers.new(mod.name, mod.type)
+        for prop in mod.bl_rna.properties:
+            key = prop.identifier
+            if prop.is_readonly or key in ("name", "type", "rna_type"):
+                continue
+            with contextlib.suppress(AttributeError, TypeError, ValueError):
+                setattr(new, key, getattr(mod, key))
+
+
+def _evaluated_positions(ob: bpy.types.Object, positions_mm: np.ndarray, scale: float) -> tuple[object, np.ndarray]:
+    """Put ``positions_mm`` on ``ob``'s mesh and return its evaluated object (modifiers applied) and positions (mm)."""
+    me = ob.data
+    me.attributes["position"].data.foreach_set("vector", (positions_mm / scale).astype(np.float32).ravel())
+    me.update()
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    depsgraph.update()
+    ev = ob.evaluated_get(depsgraph)
+    co = np.empty(3 * len(ev.data.vertices), dtype=np.float32)
+    ev.data.attributes["position"].data.foreach_get("vector", co)
+    return ev, co.reshape(-1, 3).astype(np.float64) * scale
+
+
+def _bake_evaluated(
+    ob: bpy.types.Object, mesh: FoldMesh, scene: bpy.types.Scene, numbers: list[int], frames: np.ndarray
+) -> bpy.types.Object:
+    """A new object holding ``ob``'s evaluated mesh (modifiers applied) with every frame baked to shape keys from
+    the evaluated positions, basis = the evaluated flat sheet. Raises ValueError if a modifier changes the topology
+    from frame to frame."""
+    from . import bake, mesh_object
+
+    scale = mesh_object.mm_per_unit(scene)
+    ev, base = _evaluated_positions(ob, mesh.vertices_3d, scale)
+    out = bpy.data.meshes.new_from_object(
+        ev, preserve_all_data_layers=True, depsgraph=bpy.context.evaluated_depsgraph_get()
+    )
+    shapes = [_evaluated_positions(ob, p, scale)[1] for p in frames]
+    baked = bpy.data.objects.new(ob.name, out)
+    scene.collection.objects.link(baked)
+    scene.collection.objects.unlink(ob)
+    bake.bake_shape_keys(baked, numbers, shapes, basis=base, scene=scene)
+    return baked
+
+
 def export_folded_file(
     path: str | Path,
     mesh: FoldMesh,
@@ -78,14 +166,19 @@ def export_folded_file(
     frame_numbers: Sequence[int] | None = None,
     name: str = "Folded",
     fps: int = 24,
+    unit: str | None = None,
+    modifiers_from: bpy.types.Object | None = None,
     **fold_kwargs,
 ) -> Path:
     """Write the folded ``mesh`` at ``frames`` (``(n, 3)`` or ``(k, n, 3)`` mm) to ``path``; returns the path.
 
-    By suffix: ``.obj``/``.stl`` the last frame; ``.glb``/``.gltf`` the last frame, plus morph targets and an
-    animation when there are several frames; ``.blend`` an object with the frames baked to keyed shape keys;
-    ``.fold`` the folded FOLD file (``core.fold_format.write_folded_fold``, one FOLD frame per frame, with
-    ``fold_angles``); ``.svg`` the flat crease pattern. Raises ``ValueError`` for an unknown suffix.
+    By suffix: ``.obj``/``.stl`` the last frame; ``.glb``/``.gltf`` the last frame, plus morph targets (with morph
+    normals) and an animation when there are several frames, the flat sheet as the base shape; ``.blend`` an object
+    with the frames baked to keyed shape keys; ``.fold`` the folded FOLD file (``core.io.fold.write_folded_fold``,
+    one FOLD frame per frame, with ``fold_angles``); ``.svg`` the flat crease pattern. Meshes carry UVs from the flat
+    pattern (:func:`flat_uv`) and a double-sided paper material. ``unit`` is ``"mm"`` or ``"m"`` for STL/OBJ
+    (default :data:`DEFAULT_UNIT`). ``modifiers_from`` is an object whose enabled modifiers (Solidify, ...) are
+    applied to the exported mesh at every frame. Raises ``ValueError`` for an unknown suffix or unit.
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -105,30 +198,55 @@ def export_folded_file(
         return path
     if suffix not in BLENDER_SUFFIXES:
         raise ValueError(f"{path}: cannot export '{suffix}' files; use one of .fold .svg {' '.join(BLENDER_SUFFIXES)}")
+    unit = unit or DEFAULT_UNIT[suffix]
+    if unit not in UNITS or (unit != "m" and suffix not in (".stl", ".obj")):
+        raise ValueError(f"{path}: unit {unit!r} not offered for '{suffix}' (STL/OBJ: mm or m; others: m)")
     path.parent.mkdir(parents=True, exist_ok=True)
     numbers = list(frame_numbers) if frame_numbers is not None else list(range(1, len(arr) + 1))
+    animated = len(arr) > 1 and suffix in (".glb", ".gltf", ".blend")
     from . import bake, mesh_object
 
     with temporary_scene() as scene:
         scene.render.fps = int(fps)
         scene.frame_start, scene.frame_end = numbers[0], numbers[-1]
-        ob = mesh_object.create_fold_object(mesh, arr[-1], name, scene.collection, scene=scene, creases=False)
-        if len(arr) > 1 and suffix in (".glb", ".gltf", ".blend"):
+        # Animated: the mesh itself is the flat sheet (= the basis key), so the base normals belong to the base
+        # positions; morph targets then carry their own normals.
+        base = mesh.vertices_3d if animated else arr[-1]
+        ob = mesh_object.create_fold_object(mesh, base, name, scene.collection, scene=scene, creases=False)
+        _paper_surface(ob, mesh)
+        if modifiers_from is not None:
+            _copy_modifiers(modifiers_from, ob)
+        if animated and len(ob.modifiers):
+            ob = _bake_evaluated(ob, mesh, scene, numbers, arr)
+        elif animated:
             bake.bake_shape_keys(ob, numbers, list(arr), scene=scene)
-            scene.frame_set(numbers[-1])
-        _run_exporter(path, suffix, ob, animated=len(arr) > 1)
+        if animated:
+            scene.frame_set(numbers[0])
+        _run_exporter(path, suffix, ob, animated=animated, scale=UNITS[unit] * mesh_object.mm_per_unit(scene) / 1000.0)
     return path
 
 
-def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bool) -> None:
+def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bool, scale: float = 1.0) -> None:
     # The temporary scene holds only ``ob``; select it so "selected only" exports nothing else.
     ob.select_set(True)
     if suffix == ".obj":
         result = bpy.ops.wm.obj_export(
-            filepath=str(path), export_selected_objects=True, export_materials=False, export_uv=False
+            filepath=str(path),
+            export_selected_objects=True,
+            export_materials=False,
+            export_uv=True,
+            export_normals=True,
+            apply_modifiers=True,
+            global_scale=scale,
         )
     elif suffix == ".stl":
-        result = bpy.ops.wm.stl_export(filepath=str(path), export_selected_objects=True, ascii_format=False)
+        result = bpy.ops.wm.stl_export(
+            filepath=str(path),
+            export_selected_objects=True,
+            ascii_format=False,
+            apply_modifiers=True,
+            global_scale=scale,
+        )
     elif suffix in (".glb", ".gltf"):
         result = bpy.ops.export_scene.gltf(
             filepath=str(path),
@@ -136,9 +254,12 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
             use_selection=True,
             use_active_scene=True,  # otherwise every scene (the user's too) is written
             export_morph=animated,
-            export_morph_normal=False,
+            export_morph_normal=animated,
             export_animations=animated,
-            export_apply=False,
+            export_apply=not animated,  # animated: modifiers were already baked into the shape keys
+            export_texcoords=True,
+            export_normals=True,
+            export_materials="EXPORT",
         )
     else:  # .blend
         bpy.data.libraries.write(str(path), {ob}, fake_user=True)
@@ -164,6 +285,18 @@ def write_pattern_svg(path: str | Path, mesh: FoldMesh, *, stroke_width: float |
     drawn = mesh.edge_polyline >= 0
     if not drawn.any():
         drawn = mesh.assignments != "F"
+    # The mesh stores a cut as border edges (split along the slit): give them back the Cut role, and draw each
+    # slit once by merging coincident vertices (a vertex index per position) and dropping repeated segments.
+    from ..core.io.fold import cut_mask
+
+    assignments = mesh.assignments.copy()
+    assignments[cut_mask(v, mesh.edges, assignments, mesh.triangles)] = "C"
+    size = float(np.ptp(v, axis=0).max()) or 1.0
+    _, first, inverse = np.unique(np.round(v / (1e-9 * size)), axis=0, return_index=True, return_inverse=True)
+    edges = np.sort(first[inverse.reshape(-1)][mesh.edges], axis=1)
+    once = np.zeros(len(edges), dtype=bool)
+    once[np.unique(edges, axis=0, return_index=True)[1]] = True
+    drawn &= once
     angles = np.where(np.isfinite(mesh.fold_angles), mesh.fold_angles, np.nan)
     lines = [
         '<?xml version="1.0" encoding="UTF-8"?>',
@@ -174,12 +307,12 @@ def write_pattern_svg(path: str | Path, mesh: FoldMesh, *, stroke_width: float |
     from ..core.pattern.polylines import chain_edges
 
     for a in SVG_STROKES:
-        for poly in np.unique(mesh.edge_polyline[drawn & (mesh.assignments == a)]):
-            sel = drawn & (mesh.assignments == a) & (mesh.edge_polyline == poly)
+        for poly in np.unique(mesh.edge_polyline[drawn & (assignments == a)]):
+            sel = drawn & (assignments == a) & (mesh.edge_polyline == poly)
             for angle in np.unique(np.round(np.nan_to_num(angles[sel], nan=999.0), 6)):
                 group = sel & (np.round(np.nan_to_num(angles, nan=999.0), 6) == angle)
                 opacity = 1.0 if a in "FBC" or angle == 999.0 else min(abs(float(angle)) / 180.0, 1.0)
-                for chain in chain_edges(mesh.edges[group]):
+                for chain in chain_edges(edges[group]):
                     pts = v[chain] - lo
                     pts[:, 1] = h - pts[:, 1]
                     coords = " ".join(f"{x:.6g},{y:.6g}" for x, y in pts)
@@ -191,10 +324,7 @@ def write_pattern_svg(path: str | Path, mesh: FoldMesh, *, stroke_width: float |
                     lines.append(f'<polyline {attrs}{data} points="{coords}"/>')
     lines.append("</svg>")
     text = "\n".join(lines) + "\n"
-    try:
-        from ..core.io.atomic import atomic_write_text
+    from ..core.io.atomic import atomic_write_text
 
-        atomic_write_text(path, text)
-    except ImportError:  # core.files is written by another helper; plain write until it exists
-        path.write_text(text, encoding="utf-8")
+    atomic_write_text(path, text)
     return path

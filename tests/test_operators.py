@@ -314,10 +314,32 @@ def test_export_operators_write_files_blender_reimports(folded, tmp_path):
     assert len([o for o in bpy.data.objects if o.type == "MESH"]) == 4
     import json
 
-    doc = json.loads((tmp_path / "out.fold").read_text())  # one FOLD frame per baked frame
-    assert len(doc["vertices_coords"]) == len(ob.data.vertices) and len(doc["file_frames"]) == 2
-    assert len(doc["curved_fold:fold_angles"]) == len(doc["edges_vertices"])
-    assert all(len(fr["curved_fold:fold_angles"]) == len(doc["edges_vertices"]) for fr in doc["file_frames"])
+    doc = json.loads((tmp_path / "out.fold").read_text())  # key frame = crease pattern, a FOLD frame per baked frame
+    assert len(doc["vertices_coords"]) == len(ob.data.vertices) and len(doc["file_frames"]) == 3
+    assert doc["frame_classes"] == ["creasePattern"] and "animation" in doc["file_classes"]
+    assert all(len(fr["edges_foldAngle"]) == len(doc["edges_vertices"]) for fr in doc["file_frames"])
+
+
+def test_export_mesh_applies_solidify_in_millimetres(folded, tmp_path):
+    """The guide's thickness advice: a Solidify modifier reaches STL (both skins, millimetres) and the animated GLB."""
+    ob, _, _ = folded
+    solid = ob.modifiers.new("Thickness", "SOLIDIFY")
+    solid.thickness = 0.0005
+    faces = len(ob.data.polygons)
+    stl = tmp_path / "thick.stl"
+    assert bpy.ops.curved_fold.export_folded(filepath=str(stl), file_format="STL") == {"FINISHED"}
+    raw = stl.read_bytes()
+    count = int.from_bytes(raw[80:84], "little")
+    tri = np.frombuffer(
+        raw, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]), count=count, offset=84
+    )
+    assert count >= 2 * faces
+    size_mm = np.ptp(evaluated_mm(ob), axis=0).max()
+    assert abs(np.ptp(tri["v"].reshape(-1, 3), axis=0).max() - size_mm) < 2.0
+    bpy.context.scene.frame_start, bpy.context.scene.frame_end = 1, 2
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "thick.glb"), file_format="GLB") == {"FINISHED"}
+    assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "thick.obj"), file_format="OBJ") == {"FINISHED"}
 
 
 def test_import_svg_round_trip(folded, tmp_path):

@@ -1,0 +1,212 @@
+"""Files other tools read back (issue 15): glTF normals/material/UVs, OBJ UVs, STL in millimetres with a Solidify
+thickness, the crease-pattern SVG keeping the Cut role, and the Khronos glTF validator on our GLB where node is
+installed. Real bpy, a real fold of a vendored pattern."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import struct
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from curved_fold.core.io.reader import read_pattern  # noqa: E402
+from curved_fold.core.pipeline import fold_pattern  # noqa: E402
+from curved_fold.scene import export  # noqa: E402
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
+REPO = Path(__file__).resolve().parents[1]
+
+SLIT_SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="60mm" viewBox="0 0 100 60">
+<polygon stroke="#000000" fill="none" points="0,0 100,0 100,60 0,60"/>
+<polyline stroke="#00ff00" fill="none" points="30,30 50,28 70,30"/>
+<line stroke="#0000ff" opacity="0.5" x1="50" y1="0" x2="50" y2="20"/>
+<line stroke="#ff0000" opacity="0.5" x1="50" y1="40" x2="50" y2="60"/>
+</svg>
+"""
+
+
+@pytest.fixture(scope="module")
+def wavy():
+    """wavy_pleats folded at 40 %, 70 %, 100 %: mesh and three frames (mm)."""
+    pattern = read_pattern(FIXTURES / "wavy_pleats.svg")
+    runs = [fold_pattern(pattern, percent=p) for p in (0.4, 0.7, 1.0)]
+    return runs[-1].mesh, [r.result.positions for r in runs]
+
+
+@pytest.fixture
+def empty_scene():
+    bpy.ops.wm.read_homefile(use_empty=True)
+    yield bpy.context.scene
+
+
+def read_glb(path: Path) -> tuple[dict, bytes]:
+    raw = path.read_bytes()
+    (json_len,) = struct.unpack_from("<I", raw, 12)
+    doc = json.loads(raw[20 : 20 + json_len])
+    (bin_len,) = struct.unpack_from("<I", raw, 20 + json_len)
+    return doc, raw[28 + json_len : 28 + json_len + bin_len]
+
+
+def accessor(doc: dict, blob: bytes, index: int) -> np.ndarray:
+    acc = doc["accessors"][index]
+    view = doc["bufferViews"][acc["bufferView"]]
+    dtype = {5126: np.float32, 5125: np.uint32, 5123: np.uint16, 5121: np.uint8}[acc["componentType"]]
+    width = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}[acc["type"]]
+    start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+    stride = view.get("byteStride", 0) or width * np.dtype(dtype).itemsize
+    count = acc["count"]
+    rows = np.frombuffer(
+        blob, dtype=np.uint8, count=stride * (count - 1) + width * np.dtype(dtype).itemsize, offset=start
+    )
+    out = np.lib.stride_tricks.as_strided(
+        rows.view(np.uint8), shape=(count, width * np.dtype(dtype).itemsize), strides=(stride, 1)
+    )
+    return np.ascontiguousarray(out).view(dtype).reshape(count, width)
+
+
+def face_averaged_normals(pos: np.ndarray, tris: np.ndarray) -> np.ndarray:
+    """Area-weighted average of the triangle normals around each vertex, unit length."""
+    a, b, c = pos[tris[:, 0]], pos[tris[:, 1]], pos[tris[:, 2]]
+    fn = np.cross(b - a, c - a)
+    vn = np.zeros_like(pos)
+    for k in range(3):
+        np.add.at(vn, tris[:, k], fn)
+    return vn / np.linalg.norm(vn, axis=1, keepdims=True).clip(1e-300)
+
+
+def angle_deg(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    u = u / np.linalg.norm(u, axis=1, keepdims=True)
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    return np.degrees(np.arccos(np.clip(np.sum(u * v, axis=1), -1, 1)))
+
+
+def test_glb_normals_follow_base_and_morphs_material_is_double_sided_uvs_are_flat(empty_scene, wavy, tmp_path):
+    mesh, frames = wavy
+    path = export.export_folded_file(tmp_path / "w.glb", mesh, frames)
+    doc, blob = read_glb(path)
+    prim = doc["meshes"][0]["primitives"][0]
+    pos = accessor(doc, blob, prim["attributes"]["POSITION"]).astype(np.float64)
+    nrm = accessor(doc, blob, prim["attributes"]["NORMAL"]).astype(np.float64)
+    tris = accessor(doc, blob, prim["indices"]).reshape(-1, 3).astype(np.int64)
+    assert len(tris) == mesh.n_faces
+    base_err = angle_deg(nrm, face_averaged_normals(pos, tris))
+    assert base_err.max() <= 15.0, f"base normals off by up to {base_err.max():.1f}°"
+    # every morph target moves the normals with the positions
+    assert len(prim["targets"]) == 3
+    for k, target in enumerate(prim["targets"]):
+        assert "NORMAL" in target, f"morph target {k} has no normals"
+        p = pos + accessor(doc, blob, target["POSITION"])
+        n = nrm + accessor(doc, blob, target["NORMAL"])
+        err = angle_deg(n, face_averaged_normals(p, tris))
+        assert np.median(err) <= 5.0 and np.percentile(err, 95) <= 15.0, (k, np.percentile(err, [50, 95, 100]))
+    mat = doc["materials"][prim["material"]]
+    assert mat["doubleSided"] is True
+    uv = accessor(doc, blob, prim["attributes"]["TEXCOORD_0"]).astype(np.float64)
+    # glTF's v runs down the image: v = 1 - our v. Each exported vertex sits at a mesh vertex; compare per position.
+    flat = (mesh.vertices - mesh.vertices.min(axis=0)) / np.ptp(mesh.vertices, axis=0).max()
+    base_xy = np.column_stack([pos[:, 0], -pos[:, 2]]) * 1000.0
+    nearest = np.argmin(((base_xy[:, None, :] - mesh.vertices[None, :, :]) ** 2).sum(-1), axis=1)
+    np.testing.assert_allclose(np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]), flat[nearest], atol=1e-6)
+    # the last target is the last frame, in metres (glTF's y-up (x, y, z) is Blender's (x, -z, y))
+    last = (pos + accessor(doc, blob, prim["targets"][-1]["POSITION"])) * 1000.0
+    np.testing.assert_allclose(last[:, [0, 2, 1]] * [1, -1, 1], frames[-1][nearest], atol=1e-3 * mesh.diagonal)
+
+
+def test_obj_carries_flat_uvs_and_mm_on_request(empty_scene, wavy, tmp_path):
+    mesh, frames = wavy
+    path = export.export_folded_file(tmp_path / "w.obj", mesh, frames[-1], unit="mm")
+    lines = path.read_text().splitlines()
+    v = np.array([[float(x) for x in ln.split()[1:4]] for ln in lines if ln.startswith("v ")])
+    vt = np.array([[float(x) for x in ln.split()[1:3]] for ln in lines if ln.startswith("vt ")])
+    assert len(vt) and vt.min() >= -1e-6 and vt.max() <= 1 + 1e-6
+    size = np.ptp(v, axis=0).max()
+    assert abs(size - np.ptp(frames[-1], axis=0).max()) < 1e-3 * size  # millimetres (OBJ is y-up, sizes agree)
+    with pytest.raises(ValueError, match="unit 'mm' not offered for '.glb'"):
+        export.export_folded_file(tmp_path / "w.glb", mesh, frames[-1], unit="mm")
+
+
+def read_binary_stl(path: Path) -> np.ndarray:
+    raw = path.read_bytes()
+    (count,) = struct.unpack_from("<I", raw, 80)
+    rec = np.frombuffer(
+        raw, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]), count=count, offset=84
+    )
+    return rec["v"].astype(np.float64)
+
+
+def test_solidify_reaches_stl_in_millimetres_and_animated_glb(empty_scene, wavy, tmp_path):
+    mesh, frames = wavy
+    holder = bpy.data.objects.new("Holder", bpy.data.meshes.new("Holder"))
+    solid = holder.modifiers.new("Thickness", "SOLIDIFY")
+    solid.thickness = 0.0005  # 0.5 mm in metres
+    path = export.export_folded_file(tmp_path / "w.stl", mesh, frames[-1], modifiers_from=holder)
+    tri = read_binary_stl(path)
+    assert len(tri) > mesh.n_faces * 2  # both skins (and the rim)
+    extent = np.ptp(tri.reshape(-1, 3), axis=0).max()
+    assert abs(extent - np.ptp(frames[-1], axis=0).max()) < 2.0  # millimetres, not metres
+    glb = export.export_folded_file(tmp_path / "w.glb", mesh, frames, modifiers_from=holder)
+    doc, blob = read_glb(glb)
+    prim = doc["meshes"][0]["primitives"][0]
+    assert accessor(doc, blob, prim["indices"]).size // 3 > 2 * mesh.n_faces and len(prim["targets"]) == 3
+    assert not list(bpy.data.objects) or list(bpy.data.objects) == [holder]  # the temporary scene left nothing
+
+
+def test_svg_export_keeps_cut_role_and_reimports(empty_scene, tmp_path):
+    src = tmp_path / "slit.svg"
+    src.write_text(SLIT_SVG)
+    pattern = read_pattern(src)
+    mesh = fold_pattern(pattern).mesh
+    assert "C" not in mesh.assignments.tolist()  # the mesh stores the slit as border edges
+    out = export.write_pattern_svg(tmp_path / "cp.svg", mesh)
+    assert 'stroke="#00ff00"' in out.read_text()
+    back = read_pattern(out)
+    for a in "BMVC":
+        assert back.count(a) == pattern.count(a), (a, back.count(a), pattern.count(a))
+    assert not any("border" in w and "closed" in w for w in back.warnings)
+
+
+def _validator() -> list[str] | None:
+    """The Khronos glTF validator's command: ``GLTF_VALIDATOR`` or an npm ``gltf-validator`` install found in
+    ``tools/node_modules`` or the global npm root (tools/setup.sh installs it)."""
+    node = shutil.which("node")
+    if node is None:
+        return None
+    roots = [os.environ.get("GLTF_VALIDATOR_ROOT", ""), str(REPO / "tools" / "node_modules")]
+    npm = shutil.which("npm")
+    if npm:
+        with_root = subprocess.run([npm, "root", "-g"], capture_output=True, text=True, timeout=60)
+        roots.append(with_root.stdout.strip())
+    for root in filter(None, roots):
+        if (Path(root) / "gltf-validator" / "package.json").is_file():
+            return [node, "-e", VALIDATE_JS, str(Path(root) / "gltf-validator")]
+    return None
+
+
+VALIDATE_JS = """
+const [validatorPath, file] = process.argv.slice(1);
+const validator = require(validatorPath);
+const fs = require('fs');
+validator.validateBytes(new Uint8Array(fs.readFileSync(file)))
+  .then((r) => { console.log(JSON.stringify(r.issues)); })
+  .catch((e) => { console.error(String(e)); process.exit(1); });
+"""
+
+
+def test_khronos_gltf_validator_accepts_our_glb(empty_scene, wavy, tmp_path):
+    cmd = _validator()
+    if cmd is None:
+        pytest.skip("node or the npm package gltf-validator is not installed (tools/setup.sh installs both)")
+    mesh, frames = wavy
+    path = export.export_folded_file(tmp_path / "w.glb", mesh, frames)
+    proc = subprocess.run([*cmd, str(path)], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    issues = json.loads(proc.stdout)
+    assert issues["numErrors"] == 0, issues["messages"][:5]
+    assert issues["numWarnings"] == 0, issues["messages"][:5]

@@ -142,6 +142,14 @@ class CURVED_FOLD_OT_export_pattern_svg(bpy.types.Operator, ExportHelper):
 
     filename_ext = ".svg"
     filter_glob: StringProperty(default="*.svg", options={"HIDDEN"})
+    layout: EnumProperty(
+        name="Layout",
+        items=(
+            ("ORIGAMI_SIMULATOR", "Origami Simulator", "Every role in its colour, opacity = fold angle (reads back)"),
+            ("CUTTER", "Cutter Layers", "A 'cut' layer (border, cuts; hairline) and a 'score' layer (creases)"),
+        ),
+        default="ORIGAMI_SIMULATOR",
+    )
 
     @classmethod
     def poll(cls, context):
@@ -150,7 +158,8 @@ class CURVED_FOLD_OT_export_pattern_svg(bpy.types.Operator, ExportHelper):
     def execute(self, context):
         ob = context.active_object
         try:
-            path = export.write_pattern_svg(self.filepath, mesh_object.read_fold_mesh(ob))
+            layout = "cutter" if self.layout == "CUTTER" else "origami-simulator"
+            path = export.write_pattern_svg(self.filepath, mesh_object.read_fold_mesh(ob), layout=layout)
         except (*folding.engine_errors(), OSError) as exc:
             self.report({"ERROR"}, f"SVG export of '{ob.name}' failed: {exc}")
             return {"CANCELLED"}

@@ -268,15 +268,36 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
         raise OSError(f"{path}: Blender's {suffix} exporter did not write the file ({result})")
 
 
-def write_pattern_svg(path: str | Path, mesh: FoldMesh, *, stroke_width: float | None = None) -> Path:
+SVG_LAYOUTS = ("origami-simulator", "cutter")
+"""``origami-simulator``: every role, opacity = fold angle (reads back into Origami Simulator and Curved Fold).
+``cutter``: two layers for a laser cutter or plotter, ``cut`` (borders and cuts, hairline) and ``score`` (mountains,
+valleys, undriven hinges, a heavier line), no facets and no opacity; colours stay Origami Simulator's."""
+
+CUT_ROLES, SCORE_ROLES = ("B", "C"), ("M", "V", "U")
+
+
+def write_pattern_svg(
+    path: str | Path,
+    mesh: FoldMesh,
+    *,
+    stroke_width: float | None = None,
+    layout: str = "origami-simulator",
+    cut_width: float = 0.025,
+    score_width: float = 0.2,
+) -> Path:
     """Write the flat crease pattern of ``mesh`` as SVG in Origami Simulator's convention; returns the path.
 
     Every drawn stroke (edges with a source polyline; diagonals added by triangulation are left out) becomes a
     ``<polyline>`` per chain of one assignment and angle: stroke black/red/blue/yellow/magenta/green for
-    B/M/V/F/U/C, ``opacity`` = |fold angle| / 180 (1 for F and for creases without an angle). Coordinates are
-    millimetres with y flipped back to SVG's y-down; ``width``/``height`` carry ``mm`` so plotters and laser
-    cutters get the true size. The file is written atomically.
+    B/M/V/F/U/C, ``opacity`` = |fold angle| / 180 (1 for F and for creases without an angle). Cuts, which the mesh
+    stores as split border edges, are recognised and drawn once in green. Coordinates are millimetres with y
+    flipped back to SVG's y-down; ``width``/``height`` carry ``mm`` so plotters and laser cutters get the true
+    size. ``layout="cutter"`` (:data:`SVG_LAYOUTS`) groups the strokes into ``cut`` and ``score`` layers with
+    ``cut_width``/``score_width`` (mm) line weights. The file is written atomically.
     """
+    if layout not in SVG_LAYOUTS:
+        raise ValueError(f"SVG layout {layout!r}: expected one of {', '.join(SVG_LAYOUTS)}")
+    cutter = layout == "cutter"
     path = Path(path)
     v = mesh.vertices
     lo, hi = v.min(axis=0), v.max(axis=0)
@@ -298,15 +319,23 @@ def write_pattern_svg(path: str | Path, mesh: FoldMesh, *, stroke_width: float |
     once[np.unique(edges, axis=0, return_index=True)[1]] = True
     drawn &= once
     angles = np.where(np.isfinite(mesh.fold_angles), mesh.fold_angles, np.nan)
-    lines = [
+    if cutter:
+        drawn &= np.isin(assignments, CUT_ROLES + SCORE_ROLES)
+    ns = ' xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"' if cutter else ""
+    head = [
         '<?xml version="1.0" encoding="UTF-8"?>',
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{w:.6g}mm" height="{h:.6g}mm" viewBox="0 0 {w:.6g} {h:.6g}">',
+        f'<svg xmlns="http://www.w3.org/2000/svg"{ns} width="{w:.6g}mm" height="{h:.6g}mm" '
+        f'viewBox="0 0 {w:.6g} {h:.6g}">',
         f"<!-- Curved Fold crease pattern: {int(drawn.sum())} segments, Origami Simulator colours, "
-        "opacity = |fold angle| / 180 -->",
+        + ("cut and score layers -->" if cutter else "opacity = |fold angle| / 180 -->"),
     ]
+    by_role: dict[str, list[str]] = {a: [] for a in SVG_STROKES}
     from ..core.pattern.polylines import chain_edges
 
     for a in SVG_STROKES:
+        lines = by_role[a]
+        if cutter:
+            width = cut_width if a in CUT_ROLES else score_width
         for poly in np.unique(mesh.edge_polyline[drawn & (assignments == a)]):
             sel = drawn & (assignments == a) & (mesh.edge_polyline == poly)
             for angle in np.unique(np.round(np.nan_to_num(angles[sel], nan=999.0), 6)):
@@ -317,13 +346,20 @@ def write_pattern_svg(path: str | Path, mesh: FoldMesh, *, stroke_width: float |
                     pts[:, 1] = h - pts[:, 1]
                     coords = " ".join(f"{x:.6g},{y:.6g}" for x, y in pts)
                     attrs = f'stroke="{SVG_STROKES[a]}" fill="none" stroke-width="{width:.4g}"'
-                    if opacity != 1.0:
+                    if opacity != 1.0 and not cutter:
                         attrs += f' opacity="{opacity:.6g}"'
                     src = mesh.sources[poly] if 0 <= poly < len(mesh.sources) else ""
                     data = f" data-source={quoteattr(src)}" if src else ""
                     lines.append(f'<polyline {attrs}{data} points="{coords}"/>')
-    lines.append("</svg>")
-    text = "\n".join(lines) + "\n"
+    if cutter:
+        body = []
+        for layer, roles in (("cut", CUT_ROLES), ("score", SCORE_ROLES)):
+            body.append(f'<g id="{layer}" inkscape:groupmode="layer" inkscape:label="{layer}">')
+            body += [ln for a in roles for ln in by_role[a]]
+            body.append("</g>")
+    else:
+        body = [ln for a in SVG_STROKES for ln in by_role[a]]
+    text = "\n".join([*head, *body, "</svg>"]) + "\n"
     from ..core.io.atomic import atomic_write_text
 
     atomic_write_text(path, text)

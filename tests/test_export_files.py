@@ -172,6 +172,29 @@ def test_svg_export_keeps_cut_role_and_reimports(empty_scene, tmp_path):
     assert not any("border" in w and "closed" in w for w in back.warnings)
 
 
+def test_svg_cutter_layout_has_cut_and_score_layers(empty_scene, tmp_path):
+    import xml.etree.ElementTree as ET
+
+    src = tmp_path / "slit.svg"
+    src.write_text(SLIT_SVG)
+    pattern = read_pattern(src)
+    mesh = fold_pattern(pattern).mesh
+    out = export.write_pattern_svg(tmp_path / "cut.svg", mesh, layout="cutter", cut_width=0.01, score_width=0.3)
+    ns = {"s": "http://www.w3.org/2000/svg"}
+    root = ET.parse(out).getroot()
+    layers = {g.get("id"): g.findall("s:polyline", ns) for g in root.findall("s:g", ns)}
+    assert set(layers) == {"cut", "score"}
+    assert {p.get("stroke") for p in layers["cut"]} == {"#000000", "#00ff00"}
+    assert {p.get("stroke") for p in layers["score"]} == {"#ff0000", "#0000ff"}
+    assert {p.get("stroke-width") for p in layers["cut"]} == {"0.01"}
+    assert {p.get("stroke-width") for p in layers["score"]} == {"0.3"}
+    assert not any(p.get("opacity") for ps in layers.values() for p in ps)
+    back = read_pattern(out)
+    assert [back.count(a) for a in "BMVC"] == [pattern.count(a) for a in "BMVC"]
+    with pytest.raises(ValueError, match="SVG layout 'laser'"):
+        export.write_pattern_svg(tmp_path / "x.svg", mesh, layout="laser")
+
+
 def _validator() -> list[str] | None:
     """The Khronos glTF validator's command: ``GLTF_VALIDATOR`` or an npm ``gltf-validator`` install found in
     ``tools/node_modules`` or the global npm root (tools/setup.sh installs it)."""

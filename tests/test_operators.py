@@ -340,6 +340,9 @@ def test_export_mesh_applies_solidify_in_millimetres(folded, tmp_path):
     assert bpy.ops.curved_fold.bake() == {"FINISHED"}
     assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "thick.glb"), file_format="GLB") == {"FINISHED"}
     assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "thick.obj"), file_format="OBJ") == {"FINISHED"}
+    cutter = tmp_path / "cutter.svg"
+    assert bpy.ops.curved_fold.export_pattern_svg(filepath=str(cutter), layout="CUTTER") == {"FINISHED"}
+    assert '<g id="cut"' in cutter.read_text() and '<g id="score"' in cutter.read_text()
 
 
 def test_import_svg_round_trip(folded, tmp_path):

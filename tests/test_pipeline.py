@@ -50,7 +50,8 @@ def test_cli_fold_writes_fold_and_report(tmp_path):
     )
     assert code == 0
     data = json.loads(out.read_text())
-    assert len(data["vertices_coords"]) > 0 and len(data["vertices_coords"][0]) == 3
+    assert len(data["vertices_coords"]) > 0 and len(data["vertices_coords"][0]) == 2  # key frame: crease pattern
+    assert len(data["file_frames"][0]["vertices_coords"][0]) == 3  # the folded state
     report = json.loads(rep.read_text())
     assert report["percent"] == 0.5 and report["converged"]
 

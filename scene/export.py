@@ -121,6 +121,10 @@ def _copy_modifiers(source: bpy.types.Object, target: bpy.types.Object) -> None:
                 continue
             with contextlib.suppress(AttributeError, TypeError, ValueError):
                 setattr(new, key, getattr(mod, key))
+        if mod.type == "NODES":  # Geometry Nodes inputs live in ID properties
+            for key in mod.keys():
+                with contextlib.suppress(AttributeError, TypeError, ValueError, KeyError):
+                    new[key] = mod[key]
 
 
 def _evaluated_positions(ob: bpy.types.Object, positions_mm: np.ndarray, scale: float) -> tuple[object, np.ndarray]:

@@ -181,8 +181,9 @@ def export_folded_file(
     with the frames baked to keyed shape keys; ``.fold`` the folded FOLD file (``core.io.fold.write_folded_fold``,
     one FOLD frame per frame, with ``fold_angles``); ``.svg`` the flat crease pattern. Meshes carry UVs from the flat
     pattern (:func:`flat_uv`) and a double-sided paper material. ``unit`` is ``"mm"`` or ``"m"`` for STL/OBJ
-    (default :data:`DEFAULT_UNIT`). ``modifiers_from`` is an object whose enabled modifiers (Solidify, ...) are
-    applied to the exported mesh at every frame. Raises ``ValueError`` for an unknown suffix or unit.
+    (default :data:`DEFAULT_UNIT`), any FOLD ``frame_unit`` for ``.fold``. ``modifiers_from`` is an object whose
+    enabled modifiers (Solidify, ...) are applied to the exported mesh at every frame. Raises ``ValueError`` for an
+    unknown suffix or unit.
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -198,6 +199,8 @@ def export_folded_file(
             from ..core.metrics import measures as metrics
 
             angles = [metrics.fold_angles(mesh, p) for p in arr]
+        if unit is not None:
+            fold_kwargs["unit"] = unit  # FOLD has its own units (frame_unit)
         fold_format.write_folded_fold(path, mesh, list(arr), list(np.atleast_2d(angles)), **fold_kwargs)
         return path
     if suffix not in BLENDER_SUFFIXES:

@@ -287,7 +287,13 @@ def cut_mask(
     pairs = np.sort(edges, axis=1)
     keys = pairs[:, 0] * n + pairs[:, 1]
     if faces is not None and len(faces):
-        sides = [np.sort(np.column_stack([f, np.roll(f, -1)]), axis=1) for f in map(np.asarray, faces) if len(f) > 1]
+        if isinstance(faces, np.ndarray) or len({len(f) for f in faces}) == 1:  # triangles: one array, no loop
+            rect = np.asarray(faces, dtype=np.int64)
+            sides = [np.sort(np.stack([rect, np.roll(rect, -1, axis=1)], axis=-1).reshape(-1, 2), axis=1)]
+        else:
+            sides = [
+                np.sort(np.column_stack([f, np.roll(f, -1)]), axis=1) for f in map(np.asarray, faces) if len(f) > 1
+            ]
         if sides:
             s = np.concatenate(sides)
             side_keys, counts = np.unique(s[:, 0] * n + s[:, 1], return_counts=True)

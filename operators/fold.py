@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import bpy
-import numpy as np
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
 
 from ..scene import folding, mesh_object
@@ -31,16 +30,27 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
     tolerance: FloatProperty(
         name="Tolerance", description="Largest curve-to-chord distance in mm (0 = automatic)", default=0.0, min=0.0
     )
-    mesh_type: EnumProperty(name="Mesh", items=MESH_TYPES, default="ruling")
-    use_fold_angle: BoolProperty(
-        name="Override Angle", description="Give creases without an angle this fold angle", default=False
+    mesh_type: EnumProperty(
+        name="Mesh", description="How the crease pattern is triangulated", items=MESH_TYPES, default="ruling"
     )
-    fold_angle: FloatProperty(name="Fold Angle", default=180.0, min=0.0, max=180.0)
+    use_fold_angle: BoolProperty(
+        name="Override Crease Angles",
+        description="Fold every mountain and valley crease to Fold Angle, whatever angle its curve has",
+        default=False,
+    )
+    fold_angle: FloatProperty(
+        name="Fold Angle",
+        description="Fold angle in degrees of every mountain/valley crease when Override Crease Angles is on",
+        default=180.0,
+        min=0.0,
+        max=180.0,
+    )
     fold_percent: FloatProperty(
         name="Fold Percent", default=100.0, min=0.0, max=100.0, subtype="PERCENTAGE", description="How far to fold"
     )
     solver: EnumProperty(
         name="Solver",
+        description="Which solver folds the mesh",
         items=(("fast", "Fast", "Solve to equilibrium (default)"), ("faithful", "Faithful", "Origami Simulator's")),
         default="fast",
     )
@@ -81,7 +91,7 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
             self.report({"ERROR"}, f"Fold failed: {exc}")
             return {"CANCELLED"}
         target = sources[0].users_collection[0] if sources[0].users_collection else context.scene.collection
-        name = f"{(coll.name if coll else sources[0].name)} Folded"
+        name = mesh_object.fold_object_name(coll, sources)
         ob = None
         try:
             ob = mesh_object.create_fold_object(
@@ -94,8 +104,7 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
                 warp_deg=out.warp_deg,
                 scene=context.scene,
             )
-            width = float(np.ptp(out.mesh.vertices[:, 0])) / mesh_object.mm_per_unit(context.scene)
-            ob.location.x += 1.15 * width  # beside the flat curves, which stay editable
+            mesh_object.place_beside(ob, sources, context.view_layer)  # beside the curves and earlier folds
             props = ob.curved_fold_mesh
             props.is_fold_mesh = True
             props.source_collection = coll

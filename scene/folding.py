@@ -15,7 +15,7 @@ import numpy as np
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
 from . import bake, mesh_object
-from .fold_settings import settings_dict
+from .fold_settings import override_fold_angles, settings_dict
 
 
 @dataclass
@@ -140,6 +140,9 @@ def fold_from_pattern(
     method = solver or (props.solver if props is not None else "fast")
     if angle is None and props is not None and props.use_fold_angle:
         angle = props.fold_angle
+    pattern = override_fold_angles(
+        pattern, angle
+    )  # Override Crease Angles applies to every crease, not only unset ones
     run = fold_pattern(
         pattern,
         angle=angle,

@@ -64,7 +64,9 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
 
     filename_ext = ".glb"
     filter_glob: StringProperty(default="*.glb;*.obj;*.stl;*.fold;*.blend", options={"HIDDEN"})
-    file_format: EnumProperty(name="Format", items=[f[:3] for f in FORMATS], default="GLB")
+    file_format: EnumProperty(
+        name="Format", description="File format to write", items=[f[:3] for f in FORMATS], default="GLB"
+    )
 
     @classmethod
     def poll(cls, context):

@@ -144,6 +144,7 @@ class CURVED_FOLD_OT_refold(bpy.types.Operator):
 
     rebuild: EnumProperty(
         name="Rebuild",
+        description="Rebuild the mesh from the source curves, or only solve the stored mesh again",
         items=(
             ("AUTO", "Auto", "Rebuild from the source curves when they exist, else re-solve the stored mesh"),
             ("REBUILD", "Rebuild", "Always rebuild the mesh from the source curves"),

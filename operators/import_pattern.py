@@ -27,7 +27,12 @@ class CURVED_FOLD_OT_import_pattern(bpy.types.Operator, ImportHelper):
     filename_ext = ".svg"
     filter_glob: StringProperty(default="*.svg;*.fold", options={"HIDDEN"})
     directory: StringProperty(subtype="DIR_PATH", options={"SKIP_SAVE", "HIDDEN"})
-    files: CollectionProperty(name="File Path", type=bpy.types.OperatorFileListElement, options={"SKIP_SAVE"})
+    files: CollectionProperty(
+        name="Files",
+        description="Crease pattern files to import (several may be chosen or dropped)",
+        type=bpy.types.OperatorFileListElement,
+        options={"SKIP_SAVE"},
+    )
 
     def invoke(self, context, event):
         if self.properties.is_property_set("filepath") or self.files:  # a dropped file: no file browser

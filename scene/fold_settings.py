@@ -71,7 +71,11 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
     is_fold_mesh: BoolProperty(
         name="Folded Mesh", description="This object was made by Curved Fold (read-only)", default=False, options=set()
     )
-    sources: CollectionProperty(type=CURVED_FOLD_PG_source, name="Source Curves")
+    sources: CollectionProperty(
+        type=CURVED_FOLD_PG_source,
+        name="Source Curves",
+        description="The crease curves this mesh was folded from (Re-fold and Live rebuild from them)",
+    )
     source_collection: PointerProperty(
         type=bpy.types.Collection,
         name="Source Collection",
@@ -136,7 +140,12 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
         description="Which solver folds the mesh",
         update=_live_resolve,
     )
-    solver_mode: EnumProperty(name="Bake Mode", items=SOLVER_MODES, default="QUASI_STATIC")
+    solver_mode: EnumProperty(
+        name="Bake Mode",
+        description="How Bake steps the fold from frame to frame",
+        items=SOLVER_MODES,
+        default="QUASI_STATIC",
+    )
     steps_per_frame: IntProperty(
         name="Steps per Frame",
         description="Integrator steps per frame in dynamic mode (Origami Simulator uses 100)",

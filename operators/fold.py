@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
 
 from ..scene import folding, mesh_object
-from ..scene.fold_settings import MESH_TYPES
+from ..scene.fold_settings import MESH_TYPES, override_angle_degrees, pattern_parameters
 from . import _common
 
 
@@ -25,10 +27,20 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
         name="Collection", description="Fold the crease curves of this collection instead of the selection"
     )
     interval: FloatProperty(
-        name="Interval", description="Largest chord length in mm (0 = automatic)", default=0.0, min=0.0
+        name="Interval",
+        description="Largest chord length (0 = automatic)",
+        default=0.0,
+        min=0.0,
+        subtype="DISTANCE",
+        unit="LENGTH",
     )
     tolerance: FloatProperty(
-        name="Tolerance", description="Largest curve-to-chord distance in mm (0 = automatic)", default=0.0, min=0.0
+        name="Tolerance",
+        description="Largest curve-to-chord distance (0 = automatic)",
+        default=0.0,
+        min=0.0,
+        subtype="DISTANCE",
+        unit="LENGTH",
     )
     mesh_type: EnumProperty(
         name="Mesh", description="How the crease pattern is triangulated", items=MESH_TYPES, default="ruling"
@@ -40,10 +52,12 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
     )
     fold_angle: FloatProperty(
         name="Fold Angle",
-        description="Fold angle in degrees of every mountain/valley crease when Override Crease Angles is on",
-        default=180.0,
+        description="Fold angle of every mountain/valley crease when Override Crease Angles is on",
+        default=math.pi,
         min=0.0,
-        max=180.0,
+        max=math.pi,
+        subtype="ANGLE",
+        unit="ROTATION",
     )
     fold_percent: FloatProperty(
         name="Fold Percent", default=100.0, min=0.0, max=100.0, subtype="PERCENTAGE", description="How far to fold"
@@ -78,12 +92,12 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
     def execute(self, context):
         try:
             coll, sources = self._sources(context)
-            pattern = folding.pattern_from_objects(sources, interval=self.interval, tolerance=self.tolerance)
+            pattern = folding.pattern_from_objects(sources, **pattern_parameters(self, context.scene))
             out = folding.fold_from_pattern(
                 pattern,
                 None,
                 percent=self.fold_percent / 100.0,
-                angle=self.fold_angle if self.use_fold_angle else None,
+                angle=override_angle_degrees(self),
                 mesh_type=self.mesh_type,
                 solver=self.solver,
             )

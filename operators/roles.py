@@ -6,6 +6,8 @@ Thin operators over :mod:`..scene.properties`: the role and angle are stored on 
 
 from __future__ import annotations
 
+import math
+
 import bpy
 
 from ..scene.properties import ROLE_ITEMS
@@ -32,12 +34,14 @@ class CURVED_FOLD_OT_set_crease_role(bpy.types.Operator):
     )
     fold_angle: bpy.props.FloatProperty(
         name="Fold Angle",
-        description="Target fold angle in degrees (0 flat, 180 folded flat) given to every selected curve when "
-        "Set Fold Angle is on (or this value is passed); mountains fold away from +Z, valleys towards it",
-        default=180.0,
+        description="Target fold angle (0° flat, 180° folded flat) given to every selected curve when Set Fold "
+        "Angle is on (or this value is passed); mountains fold away from +Z, valleys towards it",
+        default=math.pi,
         min=0.0,
-        max=180.0,
+        max=math.pi,
         precision=1,
+        subtype="ANGLE",
+        unit="ROTATION",
     )
 
     @classmethod
@@ -73,7 +77,7 @@ class CURVED_FOLD_OT_set_crease_role(bpy.types.Operator):
                 ob.curved_fold.fold_angle = self.fold_angle
             ob.curved_fold.role = self.role
         label = dict((item[0], item[1]) for item in ROLE_ITEMS)[self.role]
-        angle = f" ({self.fold_angle:g}°)" if sets_angle else ""
+        angle = f" ({math.degrees(self.fold_angle):.4g}°)" if sets_angle else ""
         message = f"Crease role {label}{angle} set on {len(curves)} curve(s)"
         if others:
             message += f"; {others} non-curve object(s) left unchanged"

@@ -6,6 +6,8 @@ First in the tab, as roles come first in the work (import or draw, set roles, fo
 
 from __future__ import annotations
 
+import math
+
 import bpy
 
 from ._sidebar import SidebarPanel
@@ -33,7 +35,7 @@ class VIEW3D_PT_curved_fold_crease_role(SidebarPanel, bpy.types.Panel):
         row.prop(props, "fold_angle")
         sign = {"MOUNTAIN": "−", "VALLEY": "+"}.get(props.role)
         if sign:
-            layout.label(text=f"Target fold angle {sign}{props.fold_angle:g}°", icon="INFO")
+            layout.label(text=f"Target fold angle {sign}{math.degrees(props.fold_angle):.4g}°", icon="INFO")
         layout.separator()
         col = layout.column(align=True)
         col.operator_menu_enum(

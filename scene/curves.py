@@ -38,6 +38,9 @@ STRAIGHT_TOLERANCE = 8.0 * float(np.finfo(np.float32).eps)
 """A Bézier piece whose handles lie this close to its chord (relative to its size) is a straight line: float32
 control points put handles drawn on the chord a few float32 steps off it."""
 
+ANGLE_DECIMALS = 4
+"""Fold angles are read to 0.0001°: the float32 radians Blender stores put a typed 90° at 89.999997°."""
+
 
 def default_unit_scale(scene: bpy.types.Scene | None = None) -> float:
     """Blender units per millimetre in ``scene`` (the context scene by default): ``1 / (1000 × scale_length)``."""
@@ -53,7 +56,7 @@ def _role_and_angle(ob: bpy.types.Object) -> tuple[str, float]:
     props = getattr(ob, "curved_fold", None)
     if props is None:
         return "NONE", 180.0
-    return props.role, float(props.fold_angle)
+    return props.role, round(math.degrees(props.fold_angle), ANGLE_DECIMALS)
 
 
 def _signed_angle(role: str, magnitude: float) -> float | None:
@@ -146,7 +149,7 @@ def curves_from_objects(
         angle = _signed_angle(role, magnitude)
         stored = exact_curves.read_description(ob.data)
         if stored is not None and stored.role == role and stored.angle is not None and role in ("MOUNTAIN", "VALLEY"):
-            if np.float32(abs(stored.angle)) == np.float32(magnitude):
+            if np.float32(math.radians(abs(stored.angle))) == np.float32(ob.curved_fold.fold_angle):
                 angle = float(stored.angle)  # the file's angle in double precision (the property is float32)
         transform = None
         if stored is not None:
@@ -396,7 +399,7 @@ def objects_from_curves(
             made.append(ob)
             props = ob.curved_fold
             if angle is not None and role in ("MOUNTAIN", "VALLEY"):
-                props.fold_angle = min(abs(angle), 180.0)
+                props.fold_angle = math.radians(min(abs(angle), 180.0))
             props.role = role
     except Exception:
         for ob in made:

@@ -12,6 +12,7 @@ stiffnesses, damping) a warm-started re-solve. The bake settings (bake mode, ste
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import bpy
@@ -84,18 +85,26 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
     )
     interval: FloatProperty(
         name="Interval",
-        description="Largest chord length of the discretised curves and borders, in mm (0 = automatic from the size)",
+        description="Largest chord length of the discretised curves and borders (0 = automatic: the paper's 7 mm "
+        "per 150 mm of sheet)",
         default=0.0,
         min=0.0,
-        soft_max=50.0,
+        soft_max=0.05,
+        precision=4,
+        subtype="DISTANCE",
+        unit="LENGTH",
         update=_live_update,
     )
     tolerance: FloatProperty(
         name="Tolerance",
-        description="Largest distance between a curve and its chords, in mm (0 = automatic from the size)",
+        description="Largest distance between a curve and its chords (0 = automatic: the paper's 0.07 mm per 150 mm "
+        "of sheet)",
         default=0.0,
         min=0.0,
-        soft_max=5.0,
+        soft_max=0.005,
+        precision=5,
+        subtype="DISTANCE",
+        unit="LENGTH",
         update=_live_update,
     )
     mesh_type: EnumProperty(
@@ -114,11 +123,13 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
     )
     fold_angle: FloatProperty(
         name="Fold Angle",
-        description="Fold angle (degrees, magnitude) of every mountain and valley crease when Override Crease Angles is on; "
-        "the sign comes from the role",
-        default=180.0,
+        description="Fold angle of every mountain and valley crease when Override Crease Angles is on (0° flat, "
+        "180° folded flat); the sign comes from the role",
+        default=math.pi,
         min=0.0,
-        max=180.0,
+        max=math.pi,
+        subtype="ANGLE",
+        unit="ROTATION",
         update=_live_update,
     )
     fold_percent: FloatProperty(
@@ -249,9 +260,28 @@ def unregister_extra() -> None:
         del bpy.types.Object.curved_fold_mesh
 
 
+def pattern_parameters(owner, scene: bpy.types.Scene | None = None) -> dict[str, float]:
+    """``interval`` and ``tolerance`` of a fold object's settings (or the Fold operator) in millimetres, as the
+    engine takes them; the properties are lengths in Blender units (shown in the scene's unit). 0 = automatic."""
+    from .mesh_object import mm_per_unit
+
+    mm = mm_per_unit(scene)
+    return {"interval": float(owner.interval) * mm, "tolerance": float(owner.tolerance) * mm}
+
+
+def override_angle_degrees(owner) -> float | None:
+    """The Override Crease Angles angle of a fold object's settings (or the Fold operator) in degrees, the engine's
+    unit (the property is an angle in radians, shown in the scene's rotation unit); ``None`` when it is off."""
+    if owner is None or not owner.use_fold_angle:
+        return None
+    return math.degrees(float(owner.fold_angle))
+
+
 def override_fold_angles(pattern, angle: float | None):
     """``pattern`` with every mountain and valley crease at ``angle`` degrees (valley +, mountain −): the folded
-    mesh's Override Crease Angles, which applies to every crease, whatever angle its curve carries. ``None``: unchanged."""
+    mesh's Override Crease Angles, which applies to every crease, whatever angle its curve carries.
+
+    ``None`` leaves the pattern unchanged."""
     if angle is None:
         return pattern
     angles = np.array(pattern.fold_angles, dtype=np.float64)

@@ -44,7 +44,7 @@ def bezier_object(name: str, knots, *, role: str, scale: float = 1.0, cyclic: bo
     add_bezier_spline(cu, knots, scale=scale, cyclic=cyclic)
     ob = bpy.data.objects.new(name, cu)
     bpy.context.scene.collection.objects.link(ob)
-    ob.curved_fold.fold_angle = angle
+    ob.curved_fold.fold_angle = math.radians(angle)
     ob.curved_fold.role = role
     return ob
 
@@ -254,7 +254,7 @@ def test_objects_from_curves_round_trip(mod, clean_scene):
     objects = mod.objects_from_curves(curves, coll)
     assert [ob.curved_fold.role for ob in objects] == ["BORDER", "VALLEY", "MOUNTAIN", "CUT"]
     assert [ob.name for ob in objects] == ["Border", "Valley 120°", "Mountain 45°", "Cut"]
-    assert [ob.curved_fold.fold_angle for ob in objects[1:3]] == [120.0, 45.0]
+    assert [round(math.degrees(ob.curved_fold.fold_angle), 4) for ob in objects[1:3]] == [120.0, 45.0]
     assert all(ob.name in coll.objects for ob in objects)
     assert [s.type for ob in objects for s in ob.data.splines] == ["POLY", "BEZIER", "BEZIER", "POLY"]
     back = mod.curves_from_objects(objects)
@@ -329,9 +329,9 @@ def test_set_crease_role_operator_colours_and_selects(extension, clean_scene):
     for ob in (a, b, mesh_ob):
         ob.select_set(True)
     with bpy.context.temp_override(selected_objects=[a, b, mesh_ob], active_object=a):
-        assert bpy.ops.curved_fold.set_crease_role(role="MOUNTAIN", fold_angle=75.0) == {"FINISHED"}
+        assert bpy.ops.curved_fold.set_crease_role(role="MOUNTAIN", fold_angle=math.radians(75.0)) == {"FINISHED"}
     for ob in (a, b):
-        assert ob.curved_fold.role == "MOUNTAIN" and ob.curved_fold.fold_angle == 75.0
+        assert ob.curved_fold.role == "MOUNTAIN" and ob.curved_fold.fold_angle == pytest.approx(math.radians(75.0))
         assert tuple(ob.color) == pytest.approx(properties.ROLE_COLOURS["MOUNTAIN"])
         assert ob.data.materials[0].name == "Curved Fold Mountain"
         assert tuple(ob.data.materials[0].diffuse_color) == pytest.approx((1.0, 0.0, 0.0, 1.0))

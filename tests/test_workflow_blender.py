@@ -9,6 +9,7 @@ operator is in the Object ▸ Curved Fold menu; .svg/.fold drag-and-drop; Blende
 from __future__ import annotations
 
 import json
+import math
 import struct
 from pathlib import Path
 
@@ -123,24 +124,29 @@ def test_polylines_become_poly_splines(extension, clean_scene):
 def test_role_change_keeps_the_angle_unless_one_is_given(extension, clean_scene):
     objects = import_file(REPO / "examples" / "concentric_arcs.svg")
     valley = next(ob for ob in objects if ob.curved_fold.role == "VALLEY")
-    assert valley.curved_fold.fold_angle == pytest.approx(108.0, abs=1e-4)
+    assert math.degrees(valley.curved_fold.fold_angle) == pytest.approx(108.0, abs=1e-4)
     for ob in bpy.context.selected_objects:
         ob.select_set(False)
     valley.select_set(True)
     assert bpy.ops.curved_fold.set_crease_role(role="MOUNTAIN") == {"FINISHED"}
-    assert valley.curved_fold.role == "MOUNTAIN" and valley.curved_fold.fold_angle == pytest.approx(108.0, abs=1e-4)
+    assert valley.curved_fold.role == "MOUNTAIN"
+    assert math.degrees(valley.curved_fold.fold_angle) == pytest.approx(108.0, abs=1e-4)
     curve = ext_module(extension, "scene.curves").curves_from_objects([valley])[0]
     assert curve.fold_angle == pytest.approx(-108.0, abs=1e-4)
-    assert bpy.ops.curved_fold.set_crease_role(role="VALLEY", use_fold_angle=True, fold_angle=90.0) == {"FINISHED"}
-    assert valley.curved_fold.fold_angle == 90.0
-    assert bpy.ops.curved_fold.set_crease_role(role="MOUNTAIN", fold_angle=45.0) == {"FINISHED"}  # a script's angle
-    assert valley.curved_fold.fold_angle == 45.0
+    assert bpy.ops.curved_fold.set_crease_role(role="VALLEY", use_fold_angle=True, fold_angle=math.pi / 2) == {
+        "FINISHED"
+    }
+    assert valley.curved_fold.fold_angle == pytest.approx(math.pi / 2)
+    assert bpy.ops.curved_fold.set_crease_role(role="MOUNTAIN", fold_angle=math.pi / 4) == {"FINISHED"}  # a script
+    assert valley.curved_fold.fold_angle == pytest.approx(math.pi / 4)
 
 
 def test_override_crease_angles_applies_to_every_crease(extension, clean_scene):
     objects = import_file(REPO / "examples" / "concentric_arcs.svg")  # creases drawn at ±108°
-    assert all(ob.curved_fold.fold_angle == pytest.approx(108.0, abs=1e-4) for ob in objects if ob.curved_fold.role in {"MOUNTAIN", "VALLEY"})
-    assert bpy.ops.curved_fold.fold(collection="concentric_arcs", use_fold_angle=True, fold_angle=90.0) == {"FINISHED"}
+    creases = [ob for ob in objects if ob.curved_fold.role in {"MOUNTAIN", "VALLEY"}]
+    assert all(math.degrees(ob.curved_fold.fold_angle) == pytest.approx(108.0, abs=1e-4) for ob in creases)
+    result = bpy.ops.curved_fold.fold(collection="concentric_arcs", use_fold_angle=True, fold_angle=math.pi / 2)
+    assert result == {"FINISHED"}
     me = bpy.context.active_object.data
     n = len(me.edges)
     target = np.empty(n, np.float32)
@@ -148,7 +154,8 @@ def test_override_crease_angles_applies_to_every_crease(extension, clean_scene):
     code = np.empty(n, np.int8)
     me.attributes["cf_assignment"].data.foreach_get("value", code)
     letters = np.array(ext_module(extension, "core.pattern.model").ASSIGNMENTS)[code]
-    assert np.all(target[letters == "V"] == 90.0) and np.all(target[letters == "M"] == -90.0)
+    np.testing.assert_allclose(target[letters == "V"], 90.0, atol=1e-4)
+    np.testing.assert_allclose(target[letters == "M"], -90.0, atol=1e-4)
     assert (letters == "V").any() and (letters == "M").any()
 
 

@@ -213,7 +213,9 @@ def test_exported_gltf_node_keeps_the_object_name(extension, clean_scene, tmp_pa
     assert bpy.ops.curved_fold.fold(collection="single_curve") == {"FINISHED"}
     ob = bpy.context.active_object
     path = tmp_path / "out.glb"
+    name = ob.name
     assert bpy.ops.curved_fold.export_folded(filepath=str(path), file_format="GLB") == {"FINISHED"}
+    assert ob.name == name  # the user's object keeps its name
     data = path.read_bytes()
     length = struct.unpack_from("<I", data, 12)[0]
     gltf = json.loads(data[20 : 20 + length])

@@ -200,6 +200,40 @@ def curves_from_objects(
     return [curve for curve, _, _ in collected]
 
 
+def stored_pattern(objects: Iterable[bpy.types.Object], *, unit_scale: float | None = None):
+    """The discretised pattern of a FOLD import when ``objects`` are exactly its curve objects, unedited (every
+    spline as imported, roles and angles as imported, all placed alike by a similarity): the file's own pattern,
+    which the command line folds without re-discretising. ``None`` otherwise (then the curves are discretised)."""
+    scale = default_unit_scale() if unit_scale is None else float(unit_scale)
+    objects = [ob for ob in objects if ob is not None]
+    if not objects or any(ob.type != "CURVE" for ob in objects):
+        return None
+    stored = [exact_curves.read_pattern_json(ob.data) for ob in objects]
+    if any(s is None for s in stored) or len({s.import_id for s in stored}) != 1 or stored[0].objects != len(objects):
+        return None
+    if len({ob.data.name for ob in objects}) != len(objects):
+        return None
+    matrix = np.array(objects[0].matrix_world, dtype=np.float64)
+    transform = None
+    for ob in objects:
+        desc = exact_curves.read_description(ob.data)
+        role, _ = _role_and_angle(ob)
+        if desc is None or desc.import_id != stored[0].import_id or desc.role != role:
+            return None
+        if desc.angle is not None and role in ("MOUNTAIN", "VALLEY"):
+            if np.float32(math.radians(abs(desc.angle))) != np.float32(ob.curved_fold.fold_angle):
+                return None
+        if not np.array_equal(np.array(ob.matrix_world, dtype=np.float64), matrix):
+            return None
+        transform = exact_curves.similarity(matrix, desc.unit_scale, scale)
+        if transform is None or len(ob.data.splines) != len(desc.splines):
+            return None
+        for spline, strokes in zip(ob.data.splines, desc.splines, strict=True):
+            if _unedited_strokes(spline, strokes, desc.unit_scale) is None:
+                return None
+    return exact_curves.pattern_from_json(stored[0], None if np.array_equal(transform, np.eye(3)) else transform)
+
+
 def _unedited_strokes(spline: bpy.types.Spline, strokes: list, unit_scale: float) -> list | None:
     """The stored strokes of ``spline`` if its control points are still those the import wrote, else ``None``."""
     segments = [g for s in strokes for g in s.oriented()]
@@ -351,6 +385,7 @@ def objects_from_curves(
     unit_scale: float | None = None,
     *,
     import_name: str = "pattern",
+    pattern=None,
 ) -> list[bpy.types.Object]:
     """The crease curves as a handful of curve objects in ``collection``: one per role and fold angle.
 
@@ -359,6 +394,9 @@ def objects_from_curves(
     pieces). The exact strokes are stored on each curve datablock (``exact_curves``) so that reading the objects
     back gives the file's own curves, in file order, while the splines are unedited. Objects sit at the origin in
     the XY plane; ``unit_scale`` is Blender units per mm (scene default). Creates nothing if a curve is unusable.
+
+    ``pattern`` is the discretised pattern the curves were chained from (a FOLD file): stored too, so that the
+    unedited objects fold to that very pattern (:func:`stored_pattern`), as the command line folds a FOLD file.
     """
     curves = list(curves)
     scale = default_unit_scale() if unit_scale is None else float(unit_scale)
@@ -401,6 +439,10 @@ def objects_from_curves(
             if angle is not None and role in ("MOUNTAIN", "VALLEY"):
                 props.fold_angle = math.radians(min(abs(angle), 180.0))
             props.role = role
+        if pattern is not None:
+            text = exact_curves.pattern_json(import_id, len(made), pattern)
+            for ob in made:
+                ob.data[exact_curves.PATTERN_KEY] = text
     except Exception:
         for ob in made:
             data = ob.data

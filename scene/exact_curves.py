@@ -277,3 +277,69 @@ def transform_segment(seg: CurveSegment, t: np.ndarray) -> CurveSegment:
     else:  # a mirror: R(α)·F·R(φ)·diag(rx, ry)·(cos t, sin t) = R(α−φ)·diag(rx, ry)·(cos −t, sin −t)
         arc = (float(c[0]), float(c[1]), rx * s, ry * s, alpha - phi, -theta0, -dtheta)
     return CurveSegment("arc", pts, arc)
+
+
+# ------------------------------------------------------------------------------------------------ FOLD imports
+
+PATTERN_KEY = "cf_exact_pattern"
+"""Custom property of the curve datablocks of a FOLD import: the file's discretised pattern (JSON), which the command
+line folds as it is (no re-discretisation), so the unedited import folds to the same mesh."""
+
+
+def pattern_json(import_id: str, objects: int, pattern) -> str:
+    """The JSON stored under :data:`PATTERN_KEY`: the import, how many objects it made, and the pattern's arrays."""
+    angles = np.asarray(pattern.fold_angles, dtype=np.float64)
+    return json.dumps(
+        {
+            "import": import_id,
+            "objects": int(objects),
+            "vertices": np.asarray(pattern.vertices, dtype=np.float64).ravel().tolist(),
+            "edges": np.asarray(pattern.edges, dtype=np.int64).ravel().tolist(),
+            "assignments": "".join(pattern.assignments.tolist()),
+            "fold_angles": [None if not math.isfinite(a) else float(a) for a in angles.tolist()],
+            "edge_polyline": np.asarray(pattern.edge_polyline, dtype=np.int64).tolist(),
+            "edge_from_curve": [int(b) for b in np.asarray(pattern.edge_from_curve, dtype=bool).tolist()],
+            "sources": list(pattern.sources),
+        },
+        separators=(",", ":"),
+    )
+
+
+@dataclass
+class StoredPattern:
+    import_id: str
+    objects: int
+    arrays: dict
+
+
+def read_pattern_json(data) -> StoredPattern | None:
+    """The stored FOLD pattern of a curve datablock, or ``None``."""
+    text = data.get(PATTERN_KEY) if hasattr(data, "get") else None
+    if not isinstance(text, str):
+        return None
+    try:
+        raw = json.loads(text)
+        return StoredPattern(str(raw["import"]), int(raw["objects"]), raw)
+    except (ValueError, KeyError, TypeError):
+        return None
+
+
+def pattern_from_json(stored: StoredPattern, transform: np.ndarray | None):
+    """The stored :class:`CreasePattern`, its vertices moved by ``transform`` (``None``: exactly as stored)."""
+    from ..core.pattern.model import CreasePattern
+
+    raw = stored.arrays
+    vertices = np.array(raw["vertices"], dtype=np.float64).reshape(-1, 2)
+    if transform is not None:
+        vertices = vertices @ transform[:2, :2].T + transform[:2, 2]
+    pattern = CreasePattern(
+        vertices=vertices,
+        edges=np.array(raw["edges"], dtype=np.int64).reshape(-1, 2),
+        assignments=np.array(list(raw["assignments"]), dtype="<U1"),
+        fold_angles=np.array([np.nan if a is None else a for a in raw["fold_angles"]], dtype=np.float64),
+        edge_polyline=np.array(raw["edge_polyline"], dtype=np.int64),
+        edge_from_curve=np.array(raw["edge_from_curve"], dtype=bool),
+        sources=[str(s) for s in raw["sources"]],
+    )
+    pattern.validate()
+    return pattern

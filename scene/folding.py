@@ -80,10 +80,13 @@ def solver_settings(props, *, max_iterations: int | None = None):
 def pattern_from_objects(objects, *, interval: float = 0.0, tolerance: float = 0.0):
     """Discretised :class:`CreasePattern` of crease curve objects; 0 means automatic for interval/tolerance."""
     from ..core.pattern.discretize import discretize
-    from .curves import curves_from_objects
+    from .curves import curves_from_objects, stored_pattern
 
     if not objects:
         raise PatternError("no crease curves selected: select curve objects that have a crease role")
+    stored = stored_pattern(objects)  # an unedited FOLD import: its own pattern, as the command line folds it
+    if stored is not None:
+        return stored
     curves = curves_from_objects(objects)
     return discretize(curves, interval=interval or None, tolerance=tolerance or None)
 

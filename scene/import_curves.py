@@ -31,7 +31,17 @@ def import_crease_pattern(
     """Import ``path`` as curve objects in a new collection (child of ``collection`` or the scene's); return
     ``(objects, warnings)``. The scene is unchanged if reading or conversion fails."""
     scene = scene or bpy.context.scene
-    curves, warnings = read_curves(path)
+    pattern = None
+    if Path(path).suffix.lower() == ".fold":  # keep the file's pattern: the command line folds it as it is
+        from ..core.io.fold import fold_to_pattern, read_fold
+        from ..core.pattern.polylines import curves_from_pattern
+
+        if not Path(path).is_file():
+            raise PatternError(f"{path}: no such file")
+        pattern = fold_to_pattern(read_fold(path))
+        curves, warnings = curves_from_pattern(pattern), list(pattern.warnings)
+    else:
+        curves, warnings = read_curves(path)
     if not curves:
         raise PatternError(f"{path}: no crease lines found")
     from .mesh_object import mm_per_unit
@@ -41,7 +51,7 @@ def import_crease_pattern(
     before = set(bpy.data.objects), set(bpy.data.curves), set(bpy.data.materials)
     try:
         parent.children.link(coll)
-        objects = _objects_from_curves(curves, coll, 1.0 / mm_per_unit(scene), Path(path).name)
+        objects = _objects_from_curves(curves, coll, 1.0 / mm_per_unit(scene), Path(path).name, pattern)
     except Exception:
         for ob in set(bpy.data.objects) - before[0]:
             bpy.data.objects.remove(ob)
@@ -54,7 +64,7 @@ def import_crease_pattern(
     return objects, warnings
 
 
-def _objects_from_curves(curves, coll, unit_scale, name):
+def _objects_from_curves(curves, coll, unit_scale, name, pattern):
     from .curves import objects_from_curves
 
-    return objects_from_curves(curves, coll, unit_scale, import_name=name)
+    return objects_from_curves(curves, coll, unit_scale, import_name=name, pattern=pattern)

@@ -88,6 +88,36 @@ def test_fold_operator_figures_equal_the_command_line(extension, clean_scene, pa
         assert ours == pytest.approx(theirs, rel=1e-5, abs=1e-9), key  # the properties are float32
 
 
+@pytest.mark.parametrize("name", ["cannot_fold", "curved_pleats", "huffmanTower"])
+def test_fold_file_import_folds_like_the_command_line(extension, clean_scene, tmp_path, name):
+    """A FOLD file is folded as it is by the command line (no re-discretisation, its curve flags kept); its unedited
+    import folds to the same mesh and figures. An edited one is discretised from the curves as drawn."""
+    reader = ext_module(extension, "core.io.reader")
+    fold_io = ext_module(extension, "core.io.fold")
+    pipeline = ext_module(extension, "core.pipeline")
+    folding = ext_module(extension, "scene.folding")
+    source = next(p for p in EXAMPLES + REAL if p.stem == name)
+    path = tmp_path / f"{name}.fold"
+    fold_io.write_pattern_fold(path, reader.read_pattern(source))
+    objects = import_file(path)
+    theirs = reader.read_pattern(path)
+    ours = folding.pattern_from_objects(objects)
+    for key in ("vertices", "edges", "assignments", "fold_angles", "edge_from_curve", "edge_polyline"):
+        np.testing.assert_array_equal(getattr(ours, key), getattr(theirs, key), err_msg=key)
+    assert bpy.ops.curved_fold.fold(collection=path.stem) == {"FINISHED"}
+    props = bpy.context.active_object.curved_fold_mesh
+    report = pipeline.fold_pattern(theirs).report
+    assert props.last_faces == report["faces"]
+    assert props.last_warp_mean == pytest.approx(report["warp_mean_deg"], rel=1e-5)
+    assert props.last_strain_mean == pytest.approx(report["strain_mean_pct"], rel=1e-5)
+    # Edited (one point moved): discretised from the curves as drawn, no longer the stored pattern.
+    spline = objects[0].data.splines[0]
+    points = spline.points if spline.type == "POLY" else spline.bezier_points
+    points[0].co.x += 1e-4
+    edited = folding.pattern_from_objects(objects)
+    assert not edited.edge_from_curve.any() and theirs.edge_from_curve.any() == (name != "huffmanTower")
+
+
 def test_arcs_stay_arcs_lines_stay_lines_and_edits_win(extension, clean_scene):
     curves_mod = ext_module(extension, "scene.curves")
     path = REPO / "examples" / "cannot_fold.svg"

@@ -1,11 +1,13 @@
 """Crease curves drawn in Blender ↔ the engine's :class:`~..core.pattern.CreaseCurve` (paper §3.1: the input).
 
 * :func:`curves_from_objects` reads Bézier and Poly splines of curve objects that have a crease role
-  (``Object.curved_fold``, see :mod:`.properties`), in world space, as exact segments in millimetres.
+  (``Object.curved_fold``, see :mod:`.properties`), in world space, as exact segments in millimetres. A spline an
+  import wrote and nobody edited gives back the file's own strokes (arcs as arcs, double precision, file order;
+  :mod:`.exact_curves`); :func:`stored_pattern` gives back an unedited FOLD import's pattern.
 * :func:`read_blend_file` does the same for every role-carrying curve object of a ``.blend`` file on disk (the
   ``.blend`` input of ``core.reader``), without changing the file open in Blender.
-* :func:`objects_from_curves` is the inverse, used by the Import operator: one Bézier curve object per
-  crease curve, role and angle set; arcs become cubic Béziers.
+* :func:`objects_from_curves` is the inverse, used by the Import operator: one curve object per role and fold
+  angle, one spline per chain of strokes (Poly for lines only, else Bézier with arcs as ≤ 90° cubic pieces).
 
 Units: the engine works in millimetres, Blender in Blender units (BU); 1 BU = 1000 mm × the scene's
 ``unit_settings.scale_length``. ``unit_scale`` everywhere in this module is **Blender units per millimetre**
@@ -14,7 +16,8 @@ Units: the engine works in millimetres, Blender in Blender units (BU); 1 BU = 10
 A Bézier spline's segment i runs from ``co[i]`` through ``handle_right[i]`` and ``handle_left[i+1]`` to
 ``co[i+1]`` (a cubic), plus the closing segment ``n-1 → 0`` when the spline is cyclic — exactly the curve Blender
 draws. A cubic whose handles lie on its chord, between its ends, is a straight line and becomes a ``"line"``
-segment, so straight creases stay straight (the ruling-aware swaps treat them differently from curves).
+segment, so straight creases stay straight (the ruling-aware swaps treat them differently from curves); the test
+allows a few float32 steps (:data:`STRAIGHT_TOLERANCE`), as Blender stores control points in single precision.
 """
 
 from __future__ import annotations
@@ -335,41 +338,6 @@ def _release_properties() -> None:
 
     properties.unregister_extra()
     bpy.utils.unregister_class(properties.CurvedFoldObjectProperties)
-
-
-def _arc_cubics(seg: CurveSegment) -> list[np.ndarray]:
-    """An elliptical arc as cubic Béziers, one per ≤ 90° piece, with the standard 4/3·tan(θ/4) handles."""
-    cx, cy, rx, ry, phi, theta0, dtheta = seg.arc
-    pieces = max(1, math.ceil(abs(dtheta) / (math.pi / 2) - 1e-9))
-    c, s = math.cos(phi), math.sin(phi)
-    rot = np.array([[c, s], [-s, c]])
-    out = []
-    for i in range(pieces):
-        a0 = theta0 + dtheta * i / pieces
-        a1 = theta0 + dtheta * (i + 1) / pieces
-        h = 4.0 / 3.0 * math.tan((a1 - a0) / 4.0)
-        unit = np.array(
-            [
-                [math.cos(a0), math.sin(a0)],
-                [math.cos(a0) - h * math.sin(a0), math.sin(a0) + h * math.cos(a0)],
-                [math.cos(a1) + h * math.sin(a1), math.sin(a1) - h * math.cos(a1)],
-                [math.cos(a1), math.sin(a1)],
-            ]
-        )
-        out.append((unit * np.array([rx, ry])) @ rot + np.array([cx, cy]))
-    return out
-
-
-def segment_cubics(seg: CurveSegment) -> list[np.ndarray]:
-    """Control points (4×2, mm) of the cubic Bézier piece(s) drawing ``seg`` exactly (arcs: within 0.03 %)."""
-    if seg.kind == "cubic":
-        return [np.asarray(seg.points, dtype=np.float64)]
-    if seg.kind == "line":
-        a, b = np.asarray(seg.points, dtype=np.float64)
-        return [np.array([a, a + (b - a) / 3.0, a + 2.0 * (b - a) / 3.0, b])]
-    if seg.kind == "arc":
-        return _arc_cubics(seg)
-    raise PatternError(f"unknown segment kind {seg.kind!r}")
 
 
 def _object_name(role: str, angle: float | None) -> str:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.pattern.model import CreaseCurve, CurveSegment
+from ..core.pattern.model import CreaseCurve, CurveSegment, PatternError
 
 EXACT_KEY = "cf_exact"
 """Custom property of a curve datablock holding the exact description of its splines (a JSON string)."""
@@ -115,6 +115,41 @@ def chain_strokes(curves: list[CreaseCurve], indices: list[int], quantum: float)
 
 
 # ------------------------------------------------------------------------------------------------ control points
+
+
+def _arc_cubics(seg: CurveSegment) -> list[np.ndarray]:
+    """An elliptical arc as cubic Béziers, one per ≤ 90° piece, with the standard 4/3·tan(θ/4) handles."""
+    cx, cy, rx, ry, phi, theta0, dtheta = seg.arc
+    pieces = max(1, math.ceil(abs(dtheta) / (math.pi / 2) - 1e-9))
+    c, s = math.cos(phi), math.sin(phi)
+    rot = np.array([[c, s], [-s, c]])
+    out = []
+    for i in range(pieces):
+        a0 = theta0 + dtheta * i / pieces
+        a1 = theta0 + dtheta * (i + 1) / pieces
+        h = 4.0 / 3.0 * math.tan((a1 - a0) / 4.0)
+        unit = np.array(
+            [
+                [math.cos(a0), math.sin(a0)],
+                [math.cos(a0) - h * math.sin(a0), math.sin(a0) + h * math.cos(a0)],
+                [math.cos(a1) + h * math.sin(a1), math.sin(a1) - h * math.cos(a1)],
+                [math.cos(a1), math.sin(a1)],
+            ]
+        )
+        out.append((unit * np.array([rx, ry])) @ rot + np.array([cx, cy]))
+    return out
+
+
+def segment_cubics(seg: CurveSegment) -> list[np.ndarray]:
+    """Control points (4×2, mm) of the cubic Bézier piece(s) drawing ``seg`` exactly (arcs: within 0.03 %)."""
+    if seg.kind == "cubic":
+        return [np.asarray(seg.points, dtype=np.float64)]
+    if seg.kind == "line":
+        a, b = np.asarray(seg.points, dtype=np.float64)
+        return [np.array([a, a + (b - a) / 3.0, a + 2.0 * (b - a) / 3.0, b])]
+    if seg.kind == "arc":
+        return _arc_cubics(seg)
+    raise PatternError(f"unknown segment kind {seg.kind!r}")
 
 
 def knots(pieces: list[np.ndarray], cyclic: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -227,8 +262,6 @@ def read_description(data) -> Description | None:
 
 def expected_local(strokes: list[Stroke], cyclic: bool, poly: bool, unit_scale: float) -> np.ndarray:
     """The control points (local, Blender units, flattened 2D) the import wrote for a spline of these strokes."""
-    from .curves import segment_cubics
-
     segments = [g for s in strokes for g in s.oriented()]
     if poly:
         return poly_points(segments, cyclic) * unit_scale

@@ -19,7 +19,7 @@ class CURVED_FOLD_OT_import_pattern(bpy.types.Operator, ImportHelper):
     bl_idname = "curved_fold.import_pattern"
     bl_label = "Import Crease Pattern"
     bl_description = (
-        "Import an SVG (Origami Simulator colours: mountain red, valley blue, opacity = angle/180) or FOLD crease "
+        "Import an SVG (Origami Simulator colors: mountain red, valley blue, opacity = angle/180) or FOLD crease "
         "pattern as curve objects, one per crease role and fold angle, ready to edit and fold"
     )
     bl_options = {"REGISTER", "UNDO", "PRESET"}

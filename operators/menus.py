@@ -11,7 +11,7 @@ import bpy
 
 
 class VIEW3D_MT_curved_fold(bpy.types.Menu):
-    """Curved Fold: import, crease roles, fold, live re-fold, bake, colours and export"""
+    """Curved Fold: import, crease roles, fold, live re-fold, bake, colors and export"""
 
     bl_idname = "VIEW3D_MT_curved_fold"
     bl_label = "Curved Fold"

@@ -22,7 +22,7 @@ class CURVED_FOLD_OT_set_crease_role(bpy.types.Operator):
     bl_label = "Set Crease Role"
     bl_description = (
         "Give the selected curve objects a crease role (border, mountain, valley, facet, undriven, cut); each keeps "
-        "its own fold angle unless Set Fold Angle is on. The curves are coloured as Origami Simulator draws them"
+        "its own fold angle unless Set Fold Angle is on. The curves are colored as Origami Simulator draws them"
     )
     bl_options = {"REGISTER", "UNDO"}
 

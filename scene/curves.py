@@ -194,7 +194,7 @@ def curves_from_objects(
     if not collected:
         raise PatternError(
             "no crease curves selected: select curve objects and give them a crease role "
-            "(Curved Fold sidebar, or Object ▸ Set Crease Role)"
+            "(Curved Fold sidebar, or Object ▸ Curved Fold ▸ Set Crease Role)"
         )
     keys = [key for _, _, key in collected]
     if all(key is not None for key in keys) and len({key[0] for key in keys}) == 1:

@@ -133,7 +133,7 @@ class CurvedFoldObjectProperties(bpy.types.PropertyGroup):
 
     role: bpy.props.EnumProperty(
         name="Crease Role",
-        description="What this curve is in the crease pattern (Origami Simulator colours: border black, mountain "
+        description="What this curve is in the crease pattern (Origami Simulator colors: border black, mountain "
         "red, valley blue, facet yellow, undriven magenta, cut green)",
         items=ROLE_ITEMS,
         default="NONE",

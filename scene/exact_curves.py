@@ -32,6 +32,10 @@ FLOAT32_MATCH = 8.0 * float(np.finfo(np.float32).eps)
 """Relative tolerance (of the spline's largest coordinate) within which stored and actual control points agree:
 a few float32 steps, far below any edit a designer makes."""
 
+SIMILARITY_TOLERANCE = 1e-6
+"""How far (relative) an object's 2D matrix may be from a rotation × uniform scale (± mirror) for the exact strokes
+to follow it: a few float32 steps. A non-uniform scale or a shear is far beyond it (the Bézier is used)."""
+
 
 @dataclass
 class Stroke:
@@ -284,10 +288,11 @@ def similarity(matrix: np.ndarray, import_scale: float, unit_scale: float) -> np
     m = np.asarray(matrix, dtype=np.float64)
     a = m[:2, :2] * (import_scale / unit_scale)
     s2 = abs(float(np.linalg.det(a)))
-    if s2 == 0.0 or abs(m[2, 0]) + abs(m[2, 1]) > 1e-9 * math.sqrt(s2):
+    # an object's matrix is float32: rotations are orthogonal to ~1e-7, so "similarity" is judged at float32 level
+    if s2 == 0.0 or abs(m[2, 0]) + abs(m[2, 1]) > SIMILARITY_TOLERANCE * math.sqrt(s2):
         return None
     gram = a.T @ a
-    if not np.allclose(gram, s2 * np.eye(2), rtol=0.0, atol=1e-9 * s2):
+    if not np.allclose(gram, s2 * np.eye(2), rtol=0.0, atol=SIMILARITY_TOLERANCE * s2):
         return None
     out = np.eye(3)
     out[:2, :2] = a

@@ -137,6 +137,23 @@ def test_arcs_stay_arcs_lines_stay_lines_and_edits_win(extension, clean_scene):
         for s0, s1 in zip(c0.segments, c1.segments, strict=True):
             p0 = s0.evaluate(t) * np.array([-1.0, 1.0]) + np.array([125.0, 62.5])  # 1 BU = 1000 mm
             np.testing.assert_allclose(s1.evaluate(t), p0, rtol=0, atol=1e-9)
+    # Rotated and uniformly scaled: still the exact arcs, rotated and scaled with the objects.
+    for ob in objects:
+        ob.location = (0.0, 0.0, 0.0)
+        ob.scale = (2.0, 2.0, 2.0)
+        ob.rotation_euler = (0.0, 0.0, 0.5)
+    bpy.context.view_layer.update()
+    turned = curves_mod.curves_from_objects(objects)
+    c, s_ = math.cos(0.5), math.sin(0.5)
+    rot = 2.0 * np.array([[c, -s_], [s_, c]])
+    assert [s.kind for c1 in turned for s in c1.segments] == [s.kind for c0 in before for s in c0.segments]
+    for c0, c1 in zip(before, turned, strict=True):
+        for s0, s1 in zip(c0.segments, c1.segments, strict=True):
+            np.testing.assert_allclose(s1.evaluate(t), s0.evaluate(t) @ rot.T, rtol=0, atol=1e-4)  # float32 matrix
+    for ob in objects:
+        ob.scale = (1.0, 1.0, 1.0)
+        ob.rotation_euler = (0.0, 0.0, 0.0)
+    bpy.context.view_layer.update()
     # An edited spline is read as drawn (Bézier pieces); the others keep their exact strokes.
     mountain = next(ob for ob in objects if ob.curved_fold.role == "MOUNTAIN")
     bp = next(s for s in mountain.data.splines if s.type == "BEZIER").bezier_points[0]

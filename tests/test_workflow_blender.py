@@ -282,6 +282,17 @@ def test_every_operator_is_in_the_object_menu_and_files_can_be_dropped(extension
     assert handler.bl_import_operator == "curved_fold.import_pattern"
 
 
+def test_dropped_files_are_all_imported(extension, clean_scene):
+    """What a drop on the viewport passes to the FileHandler's operator: a directory and file names."""
+    names = ["single_curve.svg", "curved_border.svg"]
+    result = bpy.ops.curved_fold.import_pattern(directory=str(REPO / "examples"), files=[{"name": n} for n in names])
+    assert result == {"FINISHED"}
+    assert {"single_curve", "curved_border"} <= set(bpy.data.collections.keys())
+    assert {ob.name for ob in bpy.context.selected_objects} == {
+        ob.name for n in names for ob in bpy.data.collections[Path(n).stem].objects
+    }
+
+
 def _groups():
     yield bpy.types.Object.bl_rna.properties["curved_fold"].fixed_type
     yield bpy.types.Object.bl_rna.properties["curved_fold_mesh"].fixed_type

@@ -132,6 +132,6 @@ def fold_pattern(
     pattern = _with_angle(pattern, angle)
     mesh = build_mesh(pattern, mesh_type=mesh_type, backend=backend)
     result = Solver(mesh, settings, solver).solve(percent)
-    warnings = list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings)
+    warnings = list(mesh.warnings)  # build_mesh starts them with the pattern's: adding those again printed them twice
     report = make_report(mesh, result, percent, mesh_type=mesh_type, solver=solver, warnings=warnings)
     return FoldRun(mesh, result, report)

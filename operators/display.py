@@ -1,5 +1,5 @@
-"""Show the strain or warp-angle colours of the active folded mesh in the 3D viewports (Solid mode, Attribute
-colour), or go back to material colours: one click instead of three viewport settings."""
+"""Show the strain or warp-angle colors of the active folded mesh in the 3D viewports (Solid mode, Attribute
+color), or go back to material colors: one click instead of three viewport settings."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def show_colours(ob: bpy.types.Object, kind: str, screens) -> int:
         name = ATTRIBUTES[kind]
         attr = ob.data.color_attributes.get(name)
         if attr is None:
-            raise ValueError(f"'{ob.name}' has no '{name}' colours: fold it first")
+            raise ValueError(f"'{ob.name}' has no '{name}' colors: fold it first")
         ob.data.color_attributes.active_color = attr
     count = 0
     for screen in screens:
@@ -32,22 +32,23 @@ def show_colours(ob: bpy.types.Object, kind: str, screens) -> int:
 
 
 class CURVED_FOLD_OT_show_colours(bpy.types.Operator):
-    """Show strain or warp-angle colours of the active folded mesh in the viewport"""
+    """Show strain or warp-angle colors of the active folded mesh in the viewport"""
 
     bl_idname = "curved_fold.show_colours"
-    bl_label = "Show Fold Colours"
+    bl_label = "Show Fold Colors"
     bl_description = (
-        "Colour the active folded mesh by strain (Origami Simulator's map: blue 0 → red 5 %) or warp angle "
-        "(blue 0° → red 10°) in the 3D viewports, or go back to material colours"
+        "Color the active folded mesh by strain (Origami Simulator's map: blue 0 → red 5 %) or warp angle "
+        "(blue 0° → red 10°) in the 3D viewports, or go back to material colors"
     )
     bl_options = {"REGISTER", "UNDO"}
 
     kind: EnumProperty(
-        name="Colours",
+        name="Colors",
+        description="What the viewports color the folded mesh by",
         items=(
-            ("STRAIN", "Strain", "Per-vertex strain, Origami Simulator's colour map"),
+            ("STRAIN", "Strain", "Per-vertex strain, Origami Simulator's color map"),
             ("WARP", "Warp Angle", "Per-face warp angle (ruling alignment; the paper's quality measure)"),
-            ("NONE", "Material", "Back to material colours"),
+            ("NONE", "Material", "Back to material colors"),
         ),
         default="STRAIN",
     )
@@ -64,7 +65,8 @@ class CURVED_FOLD_OT_show_colours(bpy.types.Operator):
         except ValueError as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
-        self.report({"INFO"}, f"'{ob.name}': {self.kind.lower()} colours in {n} viewport(s)")
+        shown = "material colors" if self.kind == "NONE" else f"{self.kind.lower()} colors"
+        self.report({"INFO"}, f"'{ob.name}': {shown} in {n} viewport(s)")
         return {"FINISHED"}
 
 

@@ -80,9 +80,12 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
 
     filename_ext = ".glb"
     filter_glob: StringProperty(default="*.glb;*.obj;*.stl;*.fold;*.blend", options={"HIDDEN"})
-    file_format: EnumProperty(name="Format", items=[f[:3] for f in FORMATS], default="GLB")
+    file_format: EnumProperty(
+        name="Format", description="File format to write", items=[f[:3] for f in FORMATS], default="GLB"
+    )
     unit: EnumProperty(
         name="Units",
+        description="Length unit of STL/OBJ files",
         items=(
             ("AUTO", "Automatic", "Millimetres for STL (what slicers assume), metres for OBJ; glTF is always metres"),
             ("MM", "Millimetres", "STL/OBJ lengths in millimetres"),
@@ -144,6 +147,7 @@ class CURVED_FOLD_OT_export_pattern_svg(bpy.types.Operator, ExportHelper):
     filter_glob: StringProperty(default="*.svg", options={"HIDDEN"})
     layout: EnumProperty(
         name="Layout",
+        description="How the flat pattern is drawn: for Origami Simulator (reads back), or in layers for a cutter",
         items=(
             ("ORIGAMI_SIMULATOR", "Origami Simulator", "Every role in its colour, opacity = fold angle (reads back)"),
             ("CUTTER", "Cutter Layers", "A 'cut' layer (border, cuts; hairline) and a 'score' layer (creases)"),

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import bpy
-import numpy as np
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
 
 from ..scene import folding, mesh_object
-from ..scene.fold_settings import MESH_TYPES
+from ..scene.fold_settings import MESH_TYPES, override_angle_degrees, pattern_parameters
 from . import _common
 
 
@@ -26,21 +27,44 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
         name="Collection", description="Fold the crease curves of this collection instead of the selection"
     )
     interval: FloatProperty(
-        name="Interval", description="Largest chord length in mm (0 = automatic)", default=0.0, min=0.0
+        name="Interval",
+        description="Largest chord length (0 = automatic)",
+        default=0.0,
+        min=0.0,
+        subtype="DISTANCE",
+        unit="LENGTH",
     )
     tolerance: FloatProperty(
-        name="Tolerance", description="Largest curve-to-chord distance in mm (0 = automatic)", default=0.0, min=0.0
+        name="Tolerance",
+        description="Largest curve-to-chord distance (0 = automatic)",
+        default=0.0,
+        min=0.0,
+        subtype="DISTANCE",
+        unit="LENGTH",
     )
-    mesh_type: EnumProperty(name="Mesh", items=MESH_TYPES, default="ruling")
+    mesh_type: EnumProperty(
+        name="Mesh", description="How the crease pattern is triangulated", items=MESH_TYPES, default="ruling"
+    )
     use_fold_angle: BoolProperty(
-        name="Override Angle", description="Give creases without an angle this fold angle", default=False
+        name="Override Crease Angles",
+        description="Fold every mountain and valley crease to Fold Angle, whatever angle its curve has",
+        default=False,
     )
-    fold_angle: FloatProperty(name="Fold Angle", default=180.0, min=0.0, max=180.0)
+    fold_angle: FloatProperty(
+        name="Fold Angle",
+        description="Fold angle of every mountain/valley crease when Override Crease Angles is on",
+        default=math.pi,
+        min=0.0,
+        max=math.pi,
+        subtype="ANGLE",
+        unit="ROTATION",
+    )
     fold_percent: FloatProperty(
         name="Fold Percent", default=100.0, min=0.0, max=100.0, subtype="PERCENTAGE", description="How far to fold"
     )
     solver: EnumProperty(
         name="Solver",
+        description="Which solver folds the mesh",
         items=(("fast", "Fast", "Solve to equilibrium (default)"), ("faithful", "Faithful", "Origami Simulator's")),
         default="fast",
     )
@@ -68,12 +92,12 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
     def execute(self, context):
         try:
             coll, sources = self._sources(context)
-            pattern = folding.pattern_from_objects(sources, interval=self.interval, tolerance=self.tolerance)
+            pattern = folding.pattern_from_objects(sources, **pattern_parameters(self, context.scene))
             out = folding.fold_from_pattern(
                 pattern,
                 None,
                 percent=self.fold_percent / 100.0,
-                angle=self.fold_angle if self.use_fold_angle else None,
+                angle=override_angle_degrees(self),
                 mesh_type=self.mesh_type,
                 solver=self.solver,
             )
@@ -81,7 +105,7 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
             self.report({"ERROR"}, f"Fold failed: {exc}")
             return {"CANCELLED"}
         target = sources[0].users_collection[0] if sources[0].users_collection else context.scene.collection
-        name = f"{(coll.name if coll else sources[0].name)} Folded"
+        name = mesh_object.fold_object_name(coll, sources)
         ob = None
         try:
             ob = mesh_object.create_fold_object(
@@ -94,8 +118,7 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
                 warp_deg=out.warp_deg,
                 scene=context.scene,
             )
-            width = float(np.ptp(out.mesh.vertices[:, 0])) / mesh_object.mm_per_unit(context.scene)
-            ob.location.x += 1.15 * width  # beside the flat curves, which stay editable
+            mesh_object.place_beside(ob, sources, context.view_layer)  # beside the curves and earlier folds
             props = ob.curved_fold_mesh
             props.is_fold_mesh = True
             props.source_collection = coll
@@ -135,6 +158,7 @@ class CURVED_FOLD_OT_refold(bpy.types.Operator):
 
     rebuild: EnumProperty(
         name="Rebuild",
+        description="Rebuild the mesh from the source curves, or only solve the stored mesh again",
         items=(
             ("AUTO", "Auto", "Rebuild from the source curves when they exist, else re-solve the stored mesh"),
             ("REBUILD", "Rebuild", "Always rebuild the mesh from the source curves"),

@@ -1,11 +1,14 @@
-"""Import operator: a crease pattern file (SVG from Origami Simulator or a drawing program, FOLD) becomes editable
-Bézier curve objects with their crease roles and angles set, in a new collection; plus File ▸ Import entry."""
+"""Import operator: a crease pattern file (SVG from Origami Simulator or a drawing program, FOLD) becomes a handful
+of editable curve objects (one per role and fold angle) in a new collection; plus the File ▸ Import entry and a
+``FileHandler`` so .svg/.fold files dropped on the 3D viewport are imported the same way."""
 
 from __future__ import annotations
 
+import os
+
 import bpy
-from bpy.props import StringProperty
-from bpy_extras.io_utils import ImportHelper
+from bpy.props import CollectionProperty, StringProperty
+from bpy_extras.io_utils import ImportHelper, poll_file_object_drop
 
 from ..scene import folding, import_curves
 
@@ -16,37 +19,71 @@ class CURVED_FOLD_OT_import_pattern(bpy.types.Operator, ImportHelper):
     bl_idname = "curved_fold.import_pattern"
     bl_label = "Import Crease Pattern"
     bl_description = (
-        "Import an SVG (Origami Simulator colours: mountain red, valley blue, opacity = angle/180) or FOLD crease "
-        "pattern as Bézier curve objects with crease roles set, ready to edit and fold"
+        "Import an SVG (Origami Simulator colors: mountain red, valley blue, opacity = angle/180) or FOLD crease "
+        "pattern as curve objects, one per crease role and fold angle, ready to edit and fold"
     )
     bl_options = {"REGISTER", "UNDO", "PRESET"}
 
     filename_ext = ".svg"
     filter_glob: StringProperty(default="*.svg;*.fold", options={"HIDDEN"})
+    directory: StringProperty(subtype="DIR_PATH", options={"SKIP_SAVE", "HIDDEN"})
+    files: CollectionProperty(
+        name="Files",
+        description="Crease pattern files to import (several may be chosen or dropped)",
+        type=bpy.types.OperatorFileListElement,
+        options={"SKIP_SAVE"},
+    )
+
+    def invoke(self, context, event):
+        if self.properties.is_property_set("filepath") or self.files:  # a dropped file: no file browser
+            return self.execute(context)
+        return ImportHelper.invoke(self, context, event)
+
+    def _paths(self) -> list[str]:
+        names = [f.name for f in self.files if f.name]
+        if names and self.directory:
+            return [os.path.join(self.directory, name) for name in names]
+        return [self.filepath]
 
     def execute(self, context):
-        try:
-            objects, warnings = import_curves.import_crease_pattern(self.filepath, scene=context.scene)
-        except (*folding.engine_errors(), OSError) as exc:
-            self.report({"ERROR"}, f"Import failed: {exc}")
-            return {"CANCELLED"}
+        made: list[bpy.types.Object] = []
+        for path in self._paths():
+            try:
+                objects, warnings = import_curves.import_crease_pattern(path, scene=context.scene)
+            except (*folding.engine_errors(), OSError) as exc:
+                self.report({"ERROR"}, f"Import failed: {exc}")
+                return {"CANCELLED"} if not made else {"FINISHED"}
+            made.extend(objects)
+            for warning in warnings[:5]:
+                self.report({"WARNING"}, warning)
+            coll = objects[0].users_collection[0].name
+            self.report({"INFO"}, f"Imported {os.path.basename(path)} as {len(objects)} curve object(s) in '{coll}'")
         for other in context.selected_objects:
             other.select_set(False)
-        for ob in objects:
+        for ob in made:
             ob.select_set(True)
-        context.view_layer.objects.active = objects[0]
-        for warning in warnings[:5]:
-            self.report({"WARNING"}, warning)
-        coll = objects[0].users_collection[0].name
-        self.report({"INFO"}, f"Imported {len(objects)} crease curves into collection '{coll}'")
+        context.view_layer.objects.active = made[0]
         return {"FINISHED"}
+
+
+class CURVED_FOLD_FH_crease_pattern(bpy.types.FileHandler):
+    """Drag and drop .svg and .fold files on the 3D viewport: imported as crease patterns"""
+
+    bl_idname = "CURVED_FOLD_FH_crease_pattern"
+    bl_label = "Crease Pattern (Curved Fold)"
+    bl_import_operator = CURVED_FOLD_OT_import_pattern.bl_idname
+    bl_file_extensions = ".svg;.fold"
+
+    @classmethod
+    def poll_drop(cls, context):
+        return poll_file_object_drop(context)
 
 
 def _menu_import(self, context):
     self.layout.operator(CURVED_FOLD_OT_import_pattern.bl_idname, text="Crease Pattern (.svg/.fold)")
 
 
-CLASSES = (CURVED_FOLD_OT_import_pattern,)
+CLASSES = (CURVED_FOLD_OT_import_pattern, CURVED_FOLD_FH_crease_pattern)
 
 
 def register_extra() -> None:

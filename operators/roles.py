@@ -6,6 +6,8 @@ Thin operators over :mod:`..scene.properties`: the role and angle are stored on 
 
 from __future__ import annotations
 
+import math
+
 import bpy
 
 from ..scene.properties import ROLE_ITEMS
@@ -14,25 +16,32 @@ _ANGLE_ROLES = {"MOUNTAIN", "VALLEY"}
 
 
 class CURVED_FOLD_OT_set_crease_role(bpy.types.Operator):
-    """Set the crease role (and fold angle) of the selected curve objects"""
+    """Set the crease role of the selected curve objects; each keeps its fold angle unless one is given"""
 
     bl_idname = "curved_fold.set_crease_role"
     bl_label = "Set Crease Role"
     bl_description = (
-        "Give the selected curve objects a crease role (border, mountain, valley, facet, undriven, cut) and, for "
-        "mountains and valleys, a fold angle; the curves are coloured as Origami Simulator draws them"
+        "Give the selected curve objects a crease role (border, mountain, valley, facet, undriven, cut); each keeps "
+        "its own fold angle unless Set Fold Angle is on. The curves are colored as Origami Simulator draws them"
     )
     bl_options = {"REGISTER", "UNDO"}
 
     role: bpy.props.EnumProperty(name="Role", description="Crease role to give the curves", items=ROLE_ITEMS)
+    use_fold_angle: bpy.props.BoolProperty(
+        name="Set Fold Angle",
+        description="Also give the curves this fold angle; off, every curve keeps its own angle",
+        default=False,
+    )
     fold_angle: bpy.props.FloatProperty(
         name="Fold Angle",
-        description="Target fold angle in degrees (0 flat, 180 folded flat); mountains fold away from +Z, valleys "
-        "towards it. Used by mountains and valleys only",
-        default=180.0,
+        description="Target fold angle (0° flat, 180° folded flat) given to every selected curve when Set Fold "
+        "Angle is on (or this value is passed); mountains fold away from +Z, valleys towards it",
+        default=math.pi,
         min=0.0,
-        max=180.0,
+        max=math.pi,
         precision=1,
+        subtype="ANGLE",
+        unit="ROTATION",
     )
 
     @classmethod
@@ -45,9 +54,16 @@ class CURVED_FOLD_OT_set_crease_role(bpy.types.Operator):
     def draw(self, context: bpy.types.Context) -> None:
         layout = self.layout
         layout.prop(self, "role")
-        row = layout.row()
+        row = layout.row(heading="Set Fold Angle")
         row.active = self.role in _ANGLE_ROLES
-        row.prop(self, "fold_angle")
+        row.prop(self, "use_fold_angle", text="")
+        sub = row.row()
+        sub.active = self.use_fold_angle
+        sub.prop(self, "fold_angle")
+
+    def _sets_angle(self) -> bool:
+        """An angle was asked for: the option is on, or a script passed ``fold_angle``. Otherwise angles stay."""
+        return self.role in _ANGLE_ROLES and (self.use_fold_angle or self.properties.is_property_set("fold_angle"))
 
     def execute(self, context: bpy.types.Context) -> set[str]:
         curves = [ob for ob in context.selected_objects if ob.type == "CURVE"]
@@ -55,12 +71,13 @@ class CURVED_FOLD_OT_set_crease_role(bpy.types.Operator):
         if not curves:
             self.report({"ERROR"}, "No curve objects selected: crease roles apply to curve objects only")
             return {"CANCELLED"}
+        sets_angle = self._sets_angle()
         for ob in curves:
-            if self.role in _ANGLE_ROLES:
+            if sets_angle:
                 ob.curved_fold.fold_angle = self.fold_angle
             ob.curved_fold.role = self.role
         label = dict((item[0], item[1]) for item in ROLE_ITEMS)[self.role]
-        angle = f" ({self.fold_angle:g}°)" if self.role in _ANGLE_ROLES else ""
+        angle = f" ({math.degrees(self.fold_angle):.4g}°)" if sets_angle else ""
         message = f"Crease role {label}{angle} set on {len(curves)} curve(s)"
         if others:
             message += f"; {others} non-curve object(s) left unchanged"
@@ -93,19 +110,4 @@ class CURVED_FOLD_OT_select_by_role(bpy.types.Operator):
         return {"FINISHED"}
 
 
-def _menu(self: bpy.types.Menu, context: bpy.types.Context) -> None:
-    layout = self.layout
-    layout.separator()
-    layout.operator_menu_enum(CURVED_FOLD_OT_set_crease_role.bl_idname, "role", text="Set Crease Role")
-    layout.operator_menu_enum(CURVED_FOLD_OT_select_by_role.bl_idname, "role", text="Select by Crease Role")
-
-
 CLASSES = (CURVED_FOLD_OT_set_crease_role, CURVED_FOLD_OT_select_by_role)
-
-
-def register_extra() -> None:
-    bpy.types.VIEW3D_MT_object.append(_menu)
-
-
-def unregister_extra() -> None:
-    bpy.types.VIEW3D_MT_object.remove(_menu)

@@ -1,9 +1,12 @@
 """Sidebar panel "Crease Role": the active curve's crease role and fold angle (Curved Fold tab).
 
-Kept in its own module, next to the main panel in ``sidebar.py`` (same category), so the two can grow separately.
+First in the tab, as roles come first in the work (import or draw, set roles, fold); the Fold panel
+(``fold_panel.py``) follows.
 """
 
 from __future__ import annotations
+
+import math
 
 import bpy
 
@@ -14,7 +17,7 @@ class VIEW3D_PT_curved_fold_crease_role(SidebarPanel, bpy.types.Panel):
     """Crease role and fold angle of the active curve object"""
 
     bl_label = "Crease Role"
-    bl_order = 10
+    bl_order = 0
 
     @classmethod
     def poll(cls, context: bpy.types.Context) -> bool:
@@ -32,7 +35,7 @@ class VIEW3D_PT_curved_fold_crease_role(SidebarPanel, bpy.types.Panel):
         row.prop(props, "fold_angle")
         sign = {"MOUNTAIN": "−", "VALLEY": "+"}.get(props.role)
         if sign:
-            layout.label(text=f"Target fold angle {sign}{props.fold_angle:g}°", icon="INFO")
+            layout.label(text=f"Target fold angle {sign}{math.degrees(props.fold_angle):.4g}°", icon="INFO")
         layout.separator()
         col = layout.column(align=True)
         col.operator_menu_enum(

@@ -19,7 +19,7 @@ class VIEW3D_PT_curved_fold_fold(SidebarPanel, bpy.types.Panel):
     """Fold the selected crease curves"""
 
     bl_label = "Fold"
-    bl_order = 0
+    bl_order = 10
 
     @classmethod
     def poll(cls, context):
@@ -37,7 +37,7 @@ class VIEW3D_PT_curved_fold_mesh(SidebarPanel, bpy.types.Panel):
     """Settings and figures of the active folded mesh"""
 
     bl_label = "Folded Mesh"
-    bl_order = 0
+    bl_order = 20
 
     @classmethod
     def poll(cls, context):
@@ -51,7 +51,7 @@ class VIEW3D_PT_curved_fold_mesh(SidebarPanel, bpy.types.Panel):
         col = layout.column()
         col.prop(props, "fold_percent", slider=True)
         row = col.row(align=True)
-        row.prop(props, "use_fold_angle", text="Override Angle")
+        row.prop(props, "use_fold_angle")
         sub = row.row()
         sub.active = props.use_fold_angle
         sub.prop(props, "fold_angle", text="")

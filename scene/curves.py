@@ -1,11 +1,13 @@
 """Crease curves drawn in Blender ↔ the engine's :class:`~..core.pattern.CreaseCurve` (paper §3.1: the input).
 
 * :func:`curves_from_objects` reads Bézier and Poly splines of curve objects that have a crease role
-  (``Object.curved_fold``, see :mod:`.properties`), in world space, as exact segments in millimetres.
+  (``Object.curved_fold``, see :mod:`.properties`), in world space, as exact segments in millimetres. A spline an
+  import wrote and nobody edited gives back the file's own strokes (arcs as arcs, double precision, file order;
+  :mod:`.exact_curves`); :func:`stored_pattern` gives back an unedited FOLD import's pattern.
 * :func:`read_blend_file` does the same for every role-carrying curve object of a ``.blend`` file on disk (the
   ``.blend`` input of ``core.reader``), without changing the file open in Blender.
-* :func:`objects_from_curves` is the inverse, used by the Import operator: one Bézier curve object per
-  crease curve, role and angle set; arcs become cubic Béziers.
+* :func:`objects_from_curves` is the inverse, used by the Import operator: one curve object per role and fold
+  angle, one spline per chain of strokes (Poly for lines only, else Bézier with arcs as ≤ 90° cubic pieces).
 
 Units: the engine works in millimetres, Blender in Blender units (BU); 1 BU = 1000 mm × the scene's
 ``unit_settings.scale_length``. ``unit_scale`` everywhere in this module is **Blender units per millimetre**
@@ -14,7 +16,8 @@ Units: the engine works in millimetres, Blender in Blender units (BU); 1 BU = 10
 A Bézier spline's segment i runs from ``co[i]`` through ``handle_right[i]`` and ``handle_left[i+1]`` to
 ``co[i+1]`` (a cubic), plus the closing segment ``n-1 → 0`` when the spline is cyclic — exactly the curve Blender
 draws. A cubic whose handles lie on its chord, between its ends, is a straight line and becomes a ``"line"``
-segment, so straight creases stay straight (the ruling-aware swaps treat them differently from curves).
+segment, so straight creases stay straight (the ruling-aware swaps treat them differently from curves); the test
+allows a few float32 steps (:data:`STRAIGHT_TOLERANCE`), as Blender stores control points in single precision.
 """
 
 from __future__ import annotations
@@ -28,10 +31,18 @@ import numpy as np
 
 from ..core.io.reader import register_blend_reader
 from ..core.pattern.model import CreaseCurve, CurveSegment, PatternError
+from . import exact_curves
 from .properties import ASSIGNMENT_ROLE, ROLE_ASSIGNMENT
 
 PLANE_TOLERANCE = 1e-5
 """Allowed spread of z (relative to the pattern's size, at least 1 mm) for curves to count as one XY plane."""
+
+STRAIGHT_TOLERANCE = 8.0 * float(np.finfo(np.float32).eps)
+"""A Bézier piece whose handles lie this close to its chord (relative to its size) is a straight line: float32
+control points put handles drawn on the chord a few float32 steps off it."""
+
+ANGLE_DECIMALS = 4
+"""Fold angles are read to 0.0001°: the float32 radians Blender stores put a typed 90° at 89.999997°."""
 
 
 def default_unit_scale(scene: bpy.types.Scene | None = None) -> float:
@@ -48,7 +59,7 @@ def _role_and_angle(ob: bpy.types.Object) -> tuple[str, float]:
     props = getattr(ob, "curved_fold", None)
     if props is None:
         return "NONE", 180.0
-    return props.role, float(props.fold_angle)
+    return props.role, round(math.degrees(props.fold_angle), ANGLE_DECIMALS)
 
 
 def _signed_angle(role: str, magnitude: float) -> float | None:
@@ -68,9 +79,13 @@ def _segment(p: np.ndarray) -> CurveSegment | None:
     if length2 == 0.0:
         return None if np.allclose(p, p[0], rtol=0.0, atol=1e-12) else CurveSegment("cubic", p.copy())
     seg = CurveSegment("cubic", p.copy())
-    if seg.is_straight:
+    # Blender stores control points in float32: handles placed on the chord land up to a few float32 steps off it
+    length = math.sqrt(length2)
+    off = np.abs(chord[0] * (p[1:3, 1] - p[0, 1]) - chord[1] * (p[1:3, 0] - p[0, 0])) / length
+    slack = STRAIGHT_TOLERANCE * max(length, float(np.abs(p).max()))
+    if np.all(off <= slack):
         t = (p[1:3] - p[0]) @ chord / length2
-        if np.all((t >= -1e-12) & (t <= 1.0 + 1e-12)):
+        if np.all((t >= -STRAIGHT_TOLERANCE) & (t <= 1.0 + STRAIGHT_TOLERANCE)):
             return CurveSegment("line", np.array([p[0], p[3]]))
     return seg
 
@@ -124,7 +139,7 @@ def curves_from_objects(
     if not scale > 0.0:
         raise PatternError(f"unit scale must be positive (Blender units per mm), got {unit_scale!r}")
     notes = warnings if warnings is not None else []
-    collected: list[tuple[CreaseCurve, np.ndarray]] = []
+    collected: list[tuple[CreaseCurve, np.ndarray, tuple[str, int] | None]] = []
     skipped: list[str] = []
     for ob in objects:
         if ob is None:
@@ -135,6 +150,13 @@ def curves_from_objects(
             continue
         assignment = ROLE_ASSIGNMENT[role]
         angle = _signed_angle(role, magnitude)
+        stored = exact_curves.read_description(ob.data)
+        if stored is not None and stored.role == role and stored.angle is not None and role in ("MOUNTAIN", "VALLEY"):
+            if np.float32(math.radians(abs(stored.angle))) == np.float32(ob.curved_fold.fold_angle):
+                angle = float(stored.angle)  # the file's angle in double precision (the property is float32)
+        transform = None
+        if stored is not None:
+            transform = exact_curves.similarity(np.array(ob.matrix_world), stored.unit_scale, scale)
         for k, spline in enumerate(ob.data.splines):
             where = f"curve '{ob.name}' spline {k}"
             kind, polygons = _spline_points(ob, spline, where)
@@ -142,6 +164,19 @@ def curves_from_objects(
                 notes.append(f"{where}: fewer than two points, skipped")
                 continue
             z = np.concatenate([p[:, 2] for p in polygons]) / scale
+            strokes = None
+            if transform is not None and k < len(stored.splines):
+                strokes = _unedited_strokes(spline, stored.splines[k], stored.unit_scale)
+            if strokes is not None:
+                identity = np.array_equal(transform, np.eye(3))
+                for stroke in strokes:
+                    segs = stroke.segments
+                    if not identity:
+                        segs = [exact_curves.transform_segment(g, transform) for g in segs]
+                    source = f"{where} ({stroke.source})" if stroke.source else where
+                    curve = CreaseCurve(segs, assignment, angle, closed=stroke.closed, source=source)
+                    collected.append((curve, z, (stored.import_id, stroke.index)))
+                continue
             segments: list[CurveSegment] = []
             for p in polygons:
                 mm = p[:, :2] / scale
@@ -152,17 +187,80 @@ def curves_from_objects(
                 notes.append(f"{where}: has zero length, skipped")
                 continue
             curve = CreaseCurve(segments, assignment, angle, closed=bool(spline.use_cyclic_u), source=where)
-            collected.append((curve, z))
+            collected.append((curve, z, None))
     if skipped:
         shown = ", ".join(f"'{name}'" for name in skipped[:10]) + (", ..." if len(skipped) > 10 else "")
         notes.append(f"{len(skipped)} object(s) without a crease role (or not curves) skipped: {shown}")
     if not collected:
         raise PatternError(
             "no crease curves selected: select curve objects and give them a crease role "
-            "(Curved Fold sidebar, or Object ▸ Set Crease Role)"
+            "(Curved Fold sidebar, or Object ▸ Curved Fold ▸ Set Crease Role)"
         )
-    _check_plane(collected, scale)
-    return [curve for curve, _ in collected]
+    keys = [key for _, _, key in collected]
+    if all(key is not None for key in keys) and len({key[0] for key in keys}) == 1:
+        collected.sort(key=lambda item: item[2][1])  # one unedited import: the file's order, as the command line
+    _check_plane([(curve, z) for curve, z, _ in collected], scale)
+    return [curve for curve, _, _ in collected]
+
+
+def stored_pattern(objects: Iterable[bpy.types.Object], *, unit_scale: float | None = None):
+    """The discretised pattern of a FOLD import when ``objects`` are exactly its curve objects, unedited (every
+    spline as imported, roles and angles as imported, all placed alike by a similarity): the file's own pattern,
+    which the command line folds without re-discretising. ``None`` otherwise (then the curves are discretised)."""
+    scale = default_unit_scale() if unit_scale is None else float(unit_scale)
+    objects = [ob for ob in objects if ob is not None]
+    if not objects or any(ob.type != "CURVE" for ob in objects):
+        return None
+    stored = [exact_curves.read_pattern_json(ob.data) for ob in objects]
+    if any(s is None for s in stored) or len({s.import_id for s in stored}) != 1 or stored[0].objects != len(objects):
+        return None
+    if len({ob.data.name for ob in objects}) != len(objects):
+        return None
+    matrix = np.array(objects[0].matrix_world, dtype=np.float64)
+    transform = None
+    for ob in objects:
+        desc = exact_curves.read_description(ob.data)
+        role, _ = _role_and_angle(ob)
+        if desc is None or desc.import_id != stored[0].import_id or desc.role != role:
+            return None
+        if desc.angle is not None and role in ("MOUNTAIN", "VALLEY"):
+            if np.float32(math.radians(abs(desc.angle))) != np.float32(ob.curved_fold.fold_angle):
+                return None
+        if not np.array_equal(np.array(ob.matrix_world, dtype=np.float64), matrix):
+            return None
+        transform = exact_curves.similarity(matrix, desc.unit_scale, scale)
+        if transform is None or len(ob.data.splines) != len(desc.splines):
+            return None
+        for spline, strokes in zip(ob.data.splines, desc.splines, strict=True):
+            if _unedited_strokes(spline, strokes, desc.unit_scale) is None:
+                return None
+    return exact_curves.pattern_from_json(stored[0], None if np.array_equal(transform, np.eye(3)) else transform)
+
+
+def _unedited_strokes(spline: bpy.types.Spline, strokes: list, unit_scale: float) -> list | None:
+    """The stored strokes of ``spline`` if its control points are still those the import wrote, else ``None``."""
+    segments = [g for s in strokes for g in s.oriented()]
+    poly = exact_curves.is_poly(segments)
+    if spline.type != ("POLY" if poly else "BEZIER"):
+        return None
+    cyclic = bool(spline.use_cyclic_u)
+    if poly:
+        n = len(spline.points)
+        a = np.empty(n * 4, dtype=np.float64)
+        spline.points.foreach_get("co", a)
+        local = a.reshape(n, 4)[:, :3]
+    else:
+        n = len(spline.bezier_points)
+        parts = []
+        for key in ("co", "handle_left", "handle_right"):
+            a = np.empty(n * 3, dtype=np.float64)
+            spline.bezier_points.foreach_get(key, a)
+            parts.append(a.reshape(n, 3))
+        local = np.concatenate(parts)
+    if np.any(local[:, 2] != 0.0):
+        return None
+    expected = exact_curves.expected_local(strokes, cyclic, poly, unit_scale)
+    return strokes if exact_curves.unchanged(local[:, :2], expected) else None
 
 
 def _check_plane(collected: list[tuple[CreaseCurve, np.ndarray]], scale: float) -> None:
@@ -242,90 +340,77 @@ def _release_properties() -> None:
     bpy.utils.unregister_class(properties.CurvedFoldObjectProperties)
 
 
-def _arc_cubics(seg: CurveSegment) -> list[np.ndarray]:
-    """An elliptical arc as cubic Béziers, one per ≤ 90° piece, with the standard 4/3·tan(θ/4) handles."""
-    cx, cy, rx, ry, phi, theta0, dtheta = seg.arc
-    pieces = max(1, math.ceil(abs(dtheta) / (math.pi / 2) - 1e-9))
-    c, s = math.cos(phi), math.sin(phi)
-    rot = np.array([[c, s], [-s, c]])
-    out = []
-    for i in range(pieces):
-        a0 = theta0 + dtheta * i / pieces
-        a1 = theta0 + dtheta * (i + 1) / pieces
-        h = 4.0 / 3.0 * math.tan((a1 - a0) / 4.0)
-        unit = np.array(
-            [
-                [math.cos(a0), math.sin(a0)],
-                [math.cos(a0) - h * math.sin(a0), math.sin(a0) + h * math.cos(a0)],
-                [math.cos(a1) + h * math.sin(a1), math.sin(a1) - h * math.cos(a1)],
-                [math.cos(a1), math.sin(a1)],
-            ]
-        )
-        out.append((unit * np.array([rx, ry])) @ rot + np.array([cx, cy]))
-    return out
-
-
-def segment_cubics(seg: CurveSegment) -> list[np.ndarray]:
-    """Control points (4×2, mm) of the cubic Bézier piece(s) drawing ``seg`` exactly (arcs: within 0.03 %)."""
-    if seg.kind == "cubic":
-        return [np.asarray(seg.points, dtype=np.float64)]
-    if seg.kind == "line":
-        a, b = np.asarray(seg.points, dtype=np.float64)
-        return [np.array([a, a + (b - a) / 3.0, a + 2.0 * (b - a) / 3.0, b])]
-    if seg.kind == "arc":
-        return _arc_cubics(seg)
-    raise PatternError(f"unknown segment kind {seg.kind!r}")
+def _object_name(role: str, angle: float | None) -> str:
+    """``"Mountain 180°"``, ``"Valley 54°"``, ``"Border"``: what the objects of one import are called."""
+    if role in ("MOUNTAIN", "VALLEY") and angle is not None and np.isfinite(angle):
+        return f"{role.title()} {abs(float(angle)):.4g}°"
+    return role.title()
 
 
 def objects_from_curves(
     curves: Iterable[CreaseCurve],
     collection: bpy.types.Collection,
     unit_scale: float | None = None,
+    *,
+    import_name: str = "pattern",
+    pattern=None,
 ) -> list[bpy.types.Object]:
-    """One Bézier curve object per crease curve, linked into ``collection``, with role and fold angle set.
+    """The crease curves as a handful of curve objects in ``collection``: one per role and fold angle.
 
-    The inverse of :func:`curves_from_objects` (lines and cubics exactly, arcs as ≤ 90° cubic pieces). Objects sit
-    at the origin with the curve in the XY plane; ``unit_scale`` is Blender units per mm (scene default).
+    Strokes of one role and angle joined end to end become one spline (``exact_curves.chain_strokes``): a Poly
+    spline when they are all lines (lines stay lines), else a Bézier spline (cubics exactly, arcs as ≤ 90° cubic
+    pieces). The exact strokes are stored on each curve datablock (``exact_curves``) so that reading the objects
+    back gives the file's own curves, in file order, while the splines are unedited. Objects sit at the origin in
+    the XY plane; ``unit_scale`` is Blender units per mm (scene default). Creates nothing if a curve is unusable.
+
+    ``pattern`` is the discretised pattern the curves were chained from (a FOLD file): stored too, so that the
+    unedited objects fold to that very pattern (:func:`stored_pattern`), as the command line folds a FOLD file.
     """
+    curves = list(curves)
     scale = default_unit_scale() if unit_scale is None else float(unit_scale)
+    groups: dict[tuple[str, float | None], list[int]] = {}
+    for i, curve in enumerate(curves):
+        where = curve.source or f"curve {i}"
+        if not curve.segments:
+            raise PatternError(f"{where}: has no segments")
+        role = ASSIGNMENT_ROLE.get(curve.assignment)
+        if role is None:
+            raise PatternError(f"{where}: unknown assignment {curve.assignment!r}")
+        angle = curve.fold_angle if role in ("MOUNTAIN", "VALLEY", "FACET") else None
+        if angle is not None and not np.isfinite(angle):
+            angle = None
+        groups.setdefault((role, None if angle is None else float(angle)), []).append(i)
+    if not curves:
+        return []
+    every = np.concatenate([s.points for c in curves for s in c.segments])
+    quantum = max(float(np.ptp(every, axis=0).max()), 1.0) * 1e-9
+    import_id = exact_curves.new_import_id(import_name)
     made: list[bpy.types.Object] = []
     try:
-        for i, curve in enumerate(curves):
-            pieces = [p for seg in curve.segments for p in segment_cubics(seg)]
-            if not pieces:
-                raise PatternError(f"{curve.source or f'curve {i}'}: has no segments")
-            role = ASSIGNMENT_ROLE.get(curve.assignment)
-            if role is None:
-                raise PatternError(f"{curve.source or f'curve {i}'}: unknown assignment {curve.assignment!r}")
-            cyclic = bool(curve.closed) and np.allclose(pieces[-1][3], pieces[0][0], rtol=0.0, atol=1e-9)
-            n_knots = len(pieces) if cyclic else len(pieces) + 1
-            # Knot j: co = start of piece j, handle_right = its first handle, handle_left = piece j-1's second handle.
-            co = np.array([p[0] for p in pieces] + ([] if cyclic else [pieces[-1][3]]))
-            right = np.array([p[1] for p in pieces] + ([] if cyclic else [pieces[-1][3]]))
-            left = np.array([pieces[-1][2] if cyclic else pieces[0][0]] + [p[2] for p in pieces[: n_knots - 1]])
-
-            def flat(a: np.ndarray) -> np.ndarray:
-                return np.column_stack([a * scale, np.zeros(len(a))]).astype(np.float64).ravel()
-
-            name = f"{role.title()} {i + 1:03d}"
+        for (role, angle), indices in groups.items():
+            name = _object_name(role, angle)
             cu = bpy.data.curves.new(name, type="CURVE")
             cu.dimensions = "2D"
-            spline = cu.splines.new("BEZIER")
-            spline.bezier_points.add(n_knots - 1)
-            for bp in spline.bezier_points:  # FREE first: setting co on AUTO handles would move the handles
-                bp.handle_left_type = "FREE"
-                bp.handle_right_type = "FREE"
-            spline.bezier_points.foreach_set("co", flat(co))
-            spline.bezier_points.foreach_set("handle_left", flat(left))
-            spline.bezier_points.foreach_set("handle_right", flat(right))
-            spline.use_cyclic_u = cyclic
+            stored: list[list[exact_curves.Stroke]] = []
+            for chain in exact_curves.chain_strokes(curves, indices, quantum):
+                strokes = [
+                    exact_curves.Stroke(i, curves[i].source, bool(curves[i].closed), rev, list(curves[i].segments))
+                    for i, rev in chain
+                ]
+                _add_spline(cu, strokes, scale, quantum)
+                stored.append(strokes)
+            cu[exact_curves.EXACT_KEY] = exact_curves.description(import_id, scale, role, angle, stored)
             ob = bpy.data.objects.new(name, cu)
             collection.objects.link(ob)
             made.append(ob)
             props = ob.curved_fold
-            if curve.fold_angle is not None and np.isfinite(curve.fold_angle) and role in ("MOUNTAIN", "VALLEY"):
-                props.fold_angle = min(abs(float(curve.fold_angle)), 180.0)
+            if angle is not None and role in ("MOUNTAIN", "VALLEY"):
+                props.fold_angle = math.radians(min(abs(angle), 180.0))
             props.role = role
+        if pattern is not None:
+            text = exact_curves.pattern_json(import_id, len(made), pattern)
+            for ob in made:
+                ob.data[exact_curves.PATTERN_KEY] = text
     except Exception:
         for ob in made:
             data = ob.data
@@ -334,3 +419,34 @@ def objects_from_curves(
                 bpy.data.curves.remove(data)
         raise
     return made
+
+
+def _is_cyclic(strokes: list[exact_curves.Stroke], quantum: float) -> bool:
+    segments = [g for s in strokes for g in s.oriented()]
+    gap = np.abs(np.asarray(segments[-1].end) - np.asarray(segments[0].start)).max()
+    return bool(gap <= quantum) and (len(segments) > 1)
+
+
+def _add_spline(cu: bpy.types.Curve, strokes: list[exact_curves.Stroke], scale: float, quantum: float) -> None:
+    """One spline through ``strokes`` (in their chained direction), written so that
+    :func:`exact_curves.expected_local` gives back exactly what is stored."""
+    segments = [g for s in strokes for g in s.oriented()]
+    cyclic = _is_cyclic(strokes, quantum)
+    poly = exact_curves.is_poly(segments)
+    flat = exact_curves.expected_local(strokes, cyclic, poly, scale)
+    if poly:
+        spline = cu.splines.new("POLY")
+        spline.points.add(len(flat) - 1)
+        spline.points.foreach_set("co", np.column_stack([flat, np.zeros(len(flat)), np.ones(len(flat))]).ravel())
+    else:
+        n = len(flat) // 3
+        spline = cu.splines.new("BEZIER")
+        spline.bezier_points.add(n - 1)
+        for bp in spline.bezier_points:  # FREE first: setting co on AUTO handles would move the handles
+            bp.handle_left_type = "FREE"
+            bp.handle_right_type = "FREE"
+        for key, part in zip(
+            ("co", "handle_left", "handle_right"), (flat[:n], flat[n : 2 * n], flat[2 * n :]), strict=True
+        ):
+            spline.bezier_points.foreach_set(key, np.column_stack([part, np.zeros(n)]).ravel())
+    spline.use_cyclic_u = cyclic

@@ -229,8 +229,28 @@ def export_folded_file(
             bake.bake_shape_keys(ob, numbers, list(arr), scene=scene)
         if animated:
             scene.frame_set(numbers[0])
-        _run_exporter(path, suffix, ob, animated=animated, scale=UNITS[unit] * mesh_object.mm_per_unit(scene) / 1000.0)
+        with _exported_as(ob, name):
+            scale = UNITS[unit] * mesh_object.mm_per_unit(scene) / 1000.0
+            _run_exporter(path, suffix, ob, animated=animated, scale=scale)
     return path
+
+
+@contextlib.contextmanager
+def _exported_as(ob: bpy.types.Object, name: str) -> Iterator[None]:
+    """Give the temporary export copy ``ob`` the exact ``name`` (the user's object's, which holds it, so the copy
+    was called ``name.001``) while the exporter runs, so exported nodes carry the object's own name; the user's
+    object gets its name back afterwards, whatever happens."""
+    holder = bpy.data.objects.get(name) if ob.name != name else None
+    if holder is None:
+        yield
+        return
+    holder.rename(name + ".curved-fold-export", mode="ALWAYS")
+    ob.rename(name, mode="ALWAYS")
+    try:
+        yield
+    finally:
+        ob.rename(name + ".curved-fold-copy", mode="ALWAYS")
+        holder.rename(name, mode="ALWAYS")
 
 
 def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bool, scale: float = 1.0) -> None:

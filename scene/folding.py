@@ -15,7 +15,7 @@ import numpy as np
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
 from . import bake, mesh_object
-from .fold_settings import settings_dict
+from .fold_settings import override_angle_degrees, override_fold_angles, pattern_parameters, settings_dict
 
 
 @dataclass
@@ -80,10 +80,13 @@ def solver_settings(props, *, max_iterations: int | None = None):
 def pattern_from_objects(objects, *, interval: float = 0.0, tolerance: float = 0.0):
     """Discretised :class:`CreasePattern` of crease curve objects; 0 means automatic for interval/tolerance."""
     from ..core.pattern.discretize import discretize
-    from .curves import curves_from_objects
+    from .curves import curves_from_objects, stored_pattern
 
     if not objects:
         raise PatternError("no crease curves selected: select curve objects that have a crease role")
+    stored = stored_pattern(objects)  # an unedited FOLD import: its own pattern, as the command line folds it
+    if stored is not None:
+        return stored
     curves = curves_from_objects(objects)
     return discretize(curves, interval=interval or None, tolerance=tolerance or None)
 
@@ -138,8 +141,11 @@ def fold_from_pattern(
     pct = (props.fold_percent / 100.0 if props is not None else 1.0) if percent is None else percent
     mesh_type = mesh_type or (props.mesh_type if props is not None else "ruling")
     method = solver or (props.solver if props is not None else "fast")
-    if angle is None and props is not None and props.use_fold_angle:
-        angle = props.fold_angle
+    if angle is None:
+        angle = override_angle_degrees(props)
+    pattern = override_fold_angles(
+        pattern, angle
+    )  # Override Crease Angles applies to every crease, not only unset ones
     run = fold_pattern(
         pattern,
         angle=angle,
@@ -238,7 +244,7 @@ def refold(
     if rebuild:
         if not sources:
             raise PatternError(f"'{ob.name}' has no source crease curves left to rebuild from")
-        pattern = pattern_from_objects(sources, interval=props.interval, tolerance=props.tolerance)
+        pattern = pattern_from_objects(sources, **pattern_parameters(props, scene))
         out = fold_from_pattern(pattern, props, max_iterations=max_iterations)
     else:
         start = None

@@ -1,10 +1,12 @@
-"""Import a crease pattern file (SVG, FOLD) as editable Bézier curve objects with their crease roles set.
+"""Import a crease pattern file (SVG, FOLD) as a handful of editable curve objects with their crease roles set.
 
 SVG strokes keep their exact geometry (lines, cubics, arcs) from ``core.svg.read_svg``; a FOLD file holds straight
-segments only, so its edges are chained into polylines (one curve per chain of one assignment and angle, through
-vertices where exactly two such edges meet). The curve objects are made by ``scene.curves.objects_from_curves``
-(the inverse of ``curves_from_objects``), inside a new collection named after the file. Nothing is written to the
-scene until the whole file has been read and converted; on failure whatever was created is removed.
+segments only, so its edges are chained into polylines (``core.pattern.polylines``). The objects are made by
+``scene.curves.objects_from_curves``: one object per role and fold angle, one spline per chain of strokes joined end
+to end, and the exact strokes stored on each object (``scene.exact_curves``) so that folding the imported, unedited
+curves gives the same mesh as the command line does for the file. They go into a new collection named after the
+file. Nothing is written to the scene until the whole file has been read and converted; on failure whatever was
+created is removed.
 """
 
 from __future__ import annotations
@@ -29,7 +31,17 @@ def import_crease_pattern(
     """Import ``path`` as curve objects in a new collection (child of ``collection`` or the scene's); return
     ``(objects, warnings)``. The scene is unchanged if reading or conversion fails."""
     scene = scene or bpy.context.scene
-    curves, warnings = read_curves(path)
+    pattern = None
+    if Path(path).suffix.lower() == ".fold":  # keep the file's pattern: the command line folds it as it is
+        from ..core.io.fold import fold_to_pattern, read_fold
+        from ..core.pattern.polylines import curves_from_pattern
+
+        if not Path(path).is_file():
+            raise PatternError(f"{path}: no such file")
+        pattern = fold_to_pattern(read_fold(path))
+        curves, warnings = curves_from_pattern(pattern), list(pattern.warnings)
+    else:
+        curves, warnings = read_curves(path)
     if not curves:
         raise PatternError(f"{path}: no crease lines found")
     from .mesh_object import mm_per_unit
@@ -39,7 +51,7 @@ def import_crease_pattern(
     before = set(bpy.data.objects), set(bpy.data.curves), set(bpy.data.materials)
     try:
         parent.children.link(coll)
-        objects = _objects_from_curves(curves, coll, 1.0 / mm_per_unit(scene))
+        objects = _objects_from_curves(curves, coll, 1.0 / mm_per_unit(scene), Path(path).name, pattern)
     except Exception:
         for ob in set(bpy.data.objects) - before[0]:
             bpy.data.objects.remove(ob)
@@ -52,7 +64,7 @@ def import_crease_pattern(
     return objects, warnings
 
 
-def _objects_from_curves(curves, coll, unit_scale):
-    from .curves import objects_from_curves  # BLENDER-INFRA's inverse of curves_from_objects
+def _objects_from_curves(curves, coll, unit_scale, name, pattern):
+    from .curves import objects_from_curves
 
-    return objects_from_curves(curves, coll, unit_scale)
+    return objects_from_curves(curves, coll, unit_scale, import_name=name, pattern=pattern)

@@ -497,3 +497,53 @@ def face_loops(triangles: np.ndarray, triangle_face: np.ndarray) -> list[np.ndar
                 best = loop
         out.append(np.array(best, dtype=np.int64))
     return out
+
+
+# ------------------------------------------------------------------------------------------------ naming, placing
+
+PLACEMENT_GAP = 0.15
+"""Gap between a new folded mesh and what it is placed beside, as a fraction of the new mesh's width."""
+
+
+def fold_object_name(collection: bpy.types.Collection | None, sources: list[bpy.types.Object]) -> str:
+    """``"<pattern> Folded"``: the pattern is the folded collection, else the one collection every source curve is
+    in (an import's collection is named after its file), else the first curve (Blender adds ``.001`` on repeats)."""
+    if collection is not None:
+        return f"{collection.name} Folded"
+    shared = None
+    for ob in sources:
+        colls = {c.name for c in ob.users_collection if not c.is_embedded_data}  # not a scene's own
+        shared = colls if shared is None else shared & colls
+    if shared:
+        return f"{sorted(shared)[0]} Folded"
+    return f"{sources[0].name} Folded" if sources else "Folded"
+
+
+def _world_box(ob: bpy.types.Object) -> np.ndarray:
+    """``[[xmin, ymin], [xmax, ymax]]`` of the object's bounding box in world space."""
+    m = np.array(ob.matrix_world, dtype=np.float64)
+    corners = np.array([tuple(c) for c in ob.bound_box], dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
+    return np.array([corners[:, :2].min(axis=0), corners[:, :2].max(axis=0)])
+
+
+def place_beside(ob: bpy.types.Object, sources: list[bpy.types.Object], view_layer=None) -> None:
+    """Move the new folded mesh ``ob`` to the right of its source curves and of every folded mesh already made from
+    them, with a gap, so a new Fold never overlaps the last one; y is aligned with the curves."""
+    view_layer = view_layer or bpy.context.view_layer
+    view_layer.update()
+    source_set = {s.name for s in sources}
+    others = [s for s in sources if s is not None]
+    for other in bpy.data.objects:
+        props = getattr(other, "curved_fold_mesh", None)
+        if other is ob or props is None or not props.is_fold_mesh:
+            continue
+        if any(s.object is not None and s.object.name in source_set for s in props.sources):
+            others.append(other)
+    if not others:
+        return
+    boxes = np.array([_world_box(o) for o in others])
+    right, bottom = float(boxes[:, 1, 0].max()), float(boxes[:, 0, 1].min())
+    own = _world_box(ob)
+    width = float(own[1, 0] - own[0, 0])
+    ob.location.x += right + PLACEMENT_GAP * width - float(own[0, 0])
+    ob.location.y += bottom - float(own[0, 1])

@@ -2,8 +2,9 @@
 
 A designer draws creases as Bézier curve objects and gives each one a *role* — border, mountain, valley, facet,
 undriven or cut (FOLD's assignments B M V F U C) — and, for mountains and valleys, a fold angle. The magnitude is
-stored (0–180°); the sign comes from the role, FOLD's convention: valley positive, mountain negative. The default,
-180°, is what an Origami Simulator SVG line at full opacity means.
+stored (0–180°; as every Blender angle property, in radians, shown in the scene's rotation unit); the sign comes from
+the role, FOLD's convention: valley positive, mountain negative. The default, 180°, is what an Origami Simulator SVG
+line at full opacity means. :attr:`CurvedFoldObjectProperties.signed_fold_angle` gives degrees, the engine's unit.
 
 A role is shown by colour, as Origami Simulator draws it (border black, mountain red, valley blue, facet yellow,
 undriven magenta, cut green): the object colour (Solid mode, Object colour) and a per-role material
@@ -11,6 +12,8 @@ undriven magenta, cut green): the object colour (Solid mode, Object colour) and 
 wire, in the theme colour, so setting a role also gives a zero-bevel curve a small round bevel (0.4 % of its size)
 and turns off 2D filling, which would otherwise paint closed borders as solid black faces.
 """
+
+import math
 
 import bpy
 
@@ -130,7 +133,7 @@ class CurvedFoldObjectProperties(bpy.types.PropertyGroup):
 
     role: bpy.props.EnumProperty(
         name="Crease Role",
-        description="What this curve is in the crease pattern (Origami Simulator colours: border black, mountain "
+        description="What this curve is in the crease pattern (Origami Simulator colors: border black, mountain "
         "red, valley blue, facet yellow, undriven magenta, cut green)",
         items=ROLE_ITEMS,
         default="NONE",
@@ -138,15 +141,14 @@ class CurvedFoldObjectProperties(bpy.types.PropertyGroup):
     )
     fold_angle: bpy.props.FloatProperty(
         name="Fold Angle",
-        description="Target fold angle of a mountain or valley crease, in degrees (0 = flat, 180 = folded flat); "
-        "the sign comes from the role: valleys fold towards +Z, mountains away",
-        default=180.0,
+        description="Target fold angle of a mountain or valley crease (0° = flat, 180° = folded flat); the sign "
+        "comes from the role: valleys fold towards +Z, mountains away",
+        default=math.pi,
         min=0.0,
-        max=180.0,
-        soft_min=0.0,
-        soft_max=180.0,
+        max=math.pi,
         precision=1,
-        subtype="NONE",
+        subtype="ANGLE",
+        unit="ROTATION",
     )
 
     @property
@@ -156,11 +158,12 @@ class CurvedFoldObjectProperties(bpy.types.PropertyGroup):
 
     @property
     def signed_fold_angle(self) -> float | None:
-        """Fold angle with FOLD's sign (valley +, mountain −), 0 for facets, ``None`` where the role has none."""
+        """Fold angle in degrees with FOLD's sign (valley +, mountain −), 0 for facets, ``None`` where the role has
+        none."""
         if self.role == "VALLEY":
-            return float(self.fold_angle)
+            return round(math.degrees(self.fold_angle), 4)
         if self.role == "MOUNTAIN":
-            return -float(self.fold_angle)
+            return -round(math.degrees(self.fold_angle), 4)
         if self.role == "FACET":
             return 0.0
         return None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import math
 import os
 import sys
 import tomllib
@@ -105,7 +106,7 @@ def test_operators_and_properties_registered(extension, clean_scene):
     assert "curved_fold" in bpy.types.Object.bl_rna.properties
     ob = bpy.data.objects.new("c", bpy.data.curves.new("c", "CURVE"))
     assert ob.curved_fold.role == "NONE"
-    assert ob.curved_fold.fold_angle == 180.0
+    assert ob.curved_fold.fold_angle == pytest.approx(math.pi)
     assert "VIEW3D_PT_curved_fold_crease_role" in dir(bpy.types)
 
 

@@ -8,6 +8,7 @@ undo restores the state, and the Live handler's detection + debounced re-fold.
 from __future__ import annotations
 
 import importlib
+import math
 from pathlib import Path
 
 import numpy as np
@@ -46,7 +47,7 @@ def make_curve(name, pieces_mm, role, angle=None, closed=False, collection=None)
     (collection or bpy.context.scene.collection).objects.link(ob)
     ob.curved_fold.role = role
     if angle is not None:
-        ob.curved_fold.fold_angle = angle
+        ob.curved_fold.fold_angle = math.radians(angle)
     return ob
 
 
@@ -355,7 +356,7 @@ def test_import_svg_round_trip(folded, tmp_path):
     roles = sorted(o.curved_fold.role for o in imported)
     assert roles == ["BORDER", "VALLEY"] and len(bpy.data.objects) == n_before + 2
     valley = next(o for o in imported if o.curved_fold.role == "VALLEY")
-    assert valley.curved_fold.fold_angle == pytest.approx(90.0, abs=1e-3)
+    assert math.degrees(valley.curved_fold.fold_angle) == pytest.approx(90.0, abs=1e-3)
     # Folding the imported curves gives the same pattern: same vertex count within the discretiser's freedom.
     select_only(imported)
     assert bpy.ops.curved_fold.fold() == {"FINISHED"}

@@ -1,0 +1,339 @@
+"""The Blender workflow as a designer meets it, through ``bpy.ops`` with the extension installed from its zip.
+
+Import groups a pattern into a handful of objects and keeps its exact strokes, so folding the imported curves gives
+the command line's mesh and figures; roles keep their angles; Override Crease Angles applies to every crease; Live
+follows every fold setting; folded meshes are named after the pattern and placed beside the last one; every
+operator is in the Object ▸ Curved Fold menu; .svg/.fold drag-and-drop; Blender's conventions for properties.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+from pathlib import Path
+
+import bpy
+import numpy as np
+import pytest
+
+from .conftest import FIXTURES, REPO, ext_module
+
+EXAMPLES = sorted((REPO / "examples").glob("*.svg"))
+REAL = sorted((FIXTURES / "origami-simulator").glob("*.svg"))
+BIG = {"Carved_Cylinder.svg", "CircularPleat-antiFacet.svg", "Rotating_Star.svg", "Treble_Clef.svg", "huffmanTower.svg"}
+"""Fixtures whose fold takes seconds: their full add-on-vs-command-line fold runs as ``slow``."""
+
+PATTERNS = [pytest.param(p, id=p.name) for p in EXAMPLES + REAL]
+FOLDS = [pytest.param(p, id=p.name, marks=[pytest.mark.slow] if p.name in BIG else []) for p in EXAMPLES + REAL]
+
+
+def import_file(path: Path) -> list[bpy.types.Object]:
+    assert bpy.ops.curved_fold.import_pattern(filepath=str(path)) == {"FINISHED"}
+    return list(bpy.data.collections[path.stem].objects)
+
+
+def expected_groups(extension, path: Path) -> set[tuple[str, float | None]]:
+    """(assignment, fold angle) of the file's strokes: the objects an import should make, one per pair."""
+    curves, _ = ext_module(extension, "core.io.reader").read_curves(path)
+    return {(c.assignment, c.fold_angle if c.assignment in "MVF" else None) for c in curves}
+
+
+@pytest.mark.parametrize("path", PATTERNS)
+def test_import_makes_one_object_per_role_and_angle(extension, clean_scene, path):
+    curves, _ = ext_module(extension, "core.io.reader").read_curves(path)
+    objects = import_file(path)
+    assert len(objects) == len(expected_groups(extension, path))
+    assert len(objects) <= 8  # CircularPleat-antiFacet: 4 objects, not 3,200
+    assert sum(len(ob.data.splines) for ob in objects) <= len(curves)
+    for ob in objects:
+        assert ob.curved_fold.role != "NONE"
+
+
+@pytest.mark.parametrize("path", PATTERNS)
+def test_imported_curves_give_the_command_line_pattern_and_mesh(extension, clean_scene, path):
+    """Unedited imports discretise to the very pattern the command line makes of the file: same vertices, edges and
+    angles, hence the same triangles."""
+    reader = ext_module(extension, "core.io.reader")
+    folding = ext_module(extension, "scene.folding")
+    build = ext_module(extension, "core.mesh.build")
+    objects = import_file(path)
+    ours = folding.pattern_from_objects(objects)
+    theirs = reader.read_pattern(path)
+    np.testing.assert_array_equal(ours.vertices, theirs.vertices)
+    np.testing.assert_array_equal(ours.edges, theirs.edges)
+    np.testing.assert_array_equal(ours.assignments, theirs.assignments)
+    np.testing.assert_array_equal(ours.fold_angles, theirs.fold_angles)
+    np.testing.assert_array_equal(ours.edge_from_curve, theirs.edge_from_curve)
+    a, b = build.build_mesh(ours), build.build_mesh(theirs)
+    np.testing.assert_array_equal(a.triangles, b.triangles)
+
+
+@pytest.mark.parametrize("path", FOLDS)
+def test_fold_operator_figures_equal_the_command_line(extension, clean_scene, path):
+    reader = ext_module(extension, "core.io.reader")
+    pipeline = ext_module(extension, "core.pipeline")
+    import_file(path)
+    assert bpy.ops.curved_fold.fold(collection=path.stem) == {"FINISHED"}
+    props = bpy.context.active_object.curved_fold_mesh
+    report = pipeline.fold_pattern(reader.read_pattern(path)).report
+    assert (props.last_faces, props.last_vertices) == (report["faces"], report["vertices"])
+    for ours, key in (
+        (props.last_strain_mean, "strain_mean_pct"),
+        (props.last_strain_max, "strain_max_pct"),
+        (props.last_warp_mean, "warp_mean_deg"),
+        (props.last_fold_error, "fold_angle_error_mean_deg"),
+    ):
+        theirs = report[key] if np.isfinite(report[key]) else 0.0
+        assert ours == pytest.approx(theirs, rel=1e-5, abs=1e-9), key  # the properties are float32
+
+
+@pytest.mark.parametrize("name", ["cannot_fold", "curved_pleats", "huffmanTower"])
+def test_fold_file_import_folds_like_the_command_line(extension, clean_scene, tmp_path, name):
+    """A FOLD file is folded as it is by the command line (no re-discretisation, its curve flags kept); its unedited
+    import folds to the same mesh and figures. An edited one is discretised from the curves as drawn."""
+    reader = ext_module(extension, "core.io.reader")
+    fold_io = ext_module(extension, "core.io.fold")
+    pipeline = ext_module(extension, "core.pipeline")
+    folding = ext_module(extension, "scene.folding")
+    source = next(p for p in EXAMPLES + REAL if p.stem == name)
+    path = tmp_path / f"{name}.fold"
+    fold_io.write_pattern_fold(path, reader.read_pattern(source))
+    objects = import_file(path)
+    theirs = reader.read_pattern(path)
+    ours = folding.pattern_from_objects(objects)
+    for key in ("vertices", "edges", "assignments", "fold_angles", "edge_from_curve", "edge_polyline"):
+        np.testing.assert_array_equal(getattr(ours, key), getattr(theirs, key), err_msg=key)
+    assert bpy.ops.curved_fold.fold(collection=path.stem) == {"FINISHED"}
+    props = bpy.context.active_object.curved_fold_mesh
+    report = pipeline.fold_pattern(theirs).report
+    assert props.last_faces == report["faces"]
+    assert props.last_warp_mean == pytest.approx(report["warp_mean_deg"], rel=1e-5)
+    assert props.last_strain_mean == pytest.approx(report["strain_mean_pct"], rel=1e-5)
+    # Edited (one point moved): discretised from the curves as drawn, no longer the stored pattern.
+    spline = objects[0].data.splines[0]
+    points = spline.points if spline.type == "POLY" else spline.bezier_points
+    points[0].co.x += 1e-4
+    edited = folding.pattern_from_objects(objects)
+    assert not edited.edge_from_curve.any() and theirs.edge_from_curve.any() == (name != "huffmanTower")
+
+
+def test_arcs_stay_arcs_lines_stay_lines_and_edits_win(extension, clean_scene):
+    curves_mod = ext_module(extension, "scene.curves")
+    path = REPO / "examples" / "cannot_fold.svg"
+    objects = import_file(path)
+    kinds = {s.kind for c in curves_mod.curves_from_objects(objects) for s in c.segments}
+    assert kinds == {"arc", "line"}
+    # Moving (and mirroring) the objects keeps the exact arcs, moved with them.
+    before = curves_mod.curves_from_objects(objects)
+    for ob in objects:
+        ob.location = (0.125, 0.0625, 0.0)  # exact in float32
+        ob.scale = (-1.0, 1.0, 1.0)
+    bpy.context.view_layer.update()
+    moved = curves_mod.curves_from_objects(objects)
+    assert [s.kind for c in moved for s in c.segments] == [s.kind for c in before for s in c.segments]
+    t = np.linspace(0.0, 1.0, 9)
+    for c0, c1 in zip(before, moved, strict=True):
+        for s0, s1 in zip(c0.segments, c1.segments, strict=True):
+            p0 = s0.evaluate(t) * np.array([-1.0, 1.0]) + np.array([125.0, 62.5])  # 1 BU = 1000 mm
+            np.testing.assert_allclose(s1.evaluate(t), p0, rtol=0, atol=1e-9)
+    # Rotated and uniformly scaled: still the exact arcs, rotated and scaled with the objects.
+    for ob in objects:
+        ob.location = (0.0, 0.0, 0.0)
+        ob.scale = (2.0, 2.0, 2.0)
+        ob.rotation_euler = (0.0, 0.0, 0.5)
+    bpy.context.view_layer.update()
+    turned = curves_mod.curves_from_objects(objects)
+    c, s_ = math.cos(0.5), math.sin(0.5)
+    rot = 2.0 * np.array([[c, -s_], [s_, c]])
+    assert [s.kind for c1 in turned for s in c1.segments] == [s.kind for c0 in before for s in c0.segments]
+    for c0, c1 in zip(before, turned, strict=True):
+        for s0, s1 in zip(c0.segments, c1.segments, strict=True):
+            np.testing.assert_allclose(s1.evaluate(t), s0.evaluate(t) @ rot.T, rtol=0, atol=1e-4)  # float32 matrix
+    for ob in objects:
+        ob.scale = (1.0, 1.0, 1.0)
+        ob.rotation_euler = (0.0, 0.0, 0.0)
+    bpy.context.view_layer.update()
+    # An edited spline is read as drawn (Bézier pieces); the others keep their exact strokes.
+    mountain = next(ob for ob in objects if ob.curved_fold.role == "MOUNTAIN")
+    bp = next(s for s in mountain.data.splines if s.type == "BEZIER").bezier_points[0]
+    bp.handle_right.y += 0.005
+    edited = curves_mod.curves_from_objects(objects)
+    kinds = [{s.kind for s in c.segments} for c in edited if c.assignment == "M"]
+    assert {"cubic"} in kinds and any("arc" in k for k in kinds)
+
+
+def test_polylines_become_poly_splines(extension, clean_scene):
+    objects = import_file(FIXTURES / "origami-simulator" / "curvedPleatSimple.svg")  # straight lines only
+    assert {s.type for ob in objects for s in ob.data.splines} == {"POLY"}  # lines stay lines
+
+
+def test_role_change_keeps_the_angle_unless_one_is_given(extension, clean_scene):
+    objects = import_file(REPO / "examples" / "concentric_arcs.svg")
+    valley = next(ob for ob in objects if ob.curved_fold.role == "VALLEY")
+    assert math.degrees(valley.curved_fold.fold_angle) == pytest.approx(108.0, abs=1e-4)
+    for ob in bpy.context.selected_objects:
+        ob.select_set(False)
+    valley.select_set(True)
+    assert bpy.ops.curved_fold.set_crease_role(role="MOUNTAIN") == {"FINISHED"}
+    assert valley.curved_fold.role == "MOUNTAIN"
+    assert math.degrees(valley.curved_fold.fold_angle) == pytest.approx(108.0, abs=1e-4)
+    curve = ext_module(extension, "scene.curves").curves_from_objects([valley])[0]
+    assert curve.fold_angle == pytest.approx(-108.0, abs=1e-4)
+    assert bpy.ops.curved_fold.set_crease_role(role="VALLEY", use_fold_angle=True, fold_angle=math.pi / 2) == {
+        "FINISHED"
+    }
+    assert valley.curved_fold.fold_angle == pytest.approx(math.pi / 2)
+    assert bpy.ops.curved_fold.set_crease_role(role="MOUNTAIN", fold_angle=math.pi / 4) == {"FINISHED"}  # a script
+    assert valley.curved_fold.fold_angle == pytest.approx(math.pi / 4)
+
+
+def test_override_crease_angles_applies_to_every_crease(extension, clean_scene):
+    objects = import_file(REPO / "examples" / "concentric_arcs.svg")  # creases drawn at ±108°
+    creases = [ob for ob in objects if ob.curved_fold.role in {"MOUNTAIN", "VALLEY"}]
+    assert all(math.degrees(ob.curved_fold.fold_angle) == pytest.approx(108.0, abs=1e-4) for ob in creases)
+    result = bpy.ops.curved_fold.fold(collection="concentric_arcs", use_fold_angle=True, fold_angle=math.pi / 2)
+    assert result == {"FINISHED"}
+    me = bpy.context.active_object.data
+    n = len(me.edges)
+    target = np.empty(n, np.float32)
+    me.attributes["cf_fold_angle"].data.foreach_get("value", target)
+    code = np.empty(n, np.int8)
+    me.attributes["cf_assignment"].data.foreach_get("value", code)
+    letters = np.array(ext_module(extension, "core.pattern.model").ASSIGNMENTS)[code]
+    np.testing.assert_allclose(target[letters == "V"], 90.0, atol=1e-4)
+    np.testing.assert_allclose(target[letters == "M"], -90.0, atol=1e-4)
+    assert (letters == "V").any() and (letters == "M").any()
+
+
+def test_live_refolds_on_a_stiffness_change(extension, clean_scene):
+    live = ext_module(extension, "scene.live")
+    import_file(REPO / "examples" / "single_curve.svg")
+    assert bpy.ops.curved_fold.fold(collection="single_curve", fold_percent=60.0) == {"FINISHED"}
+    ob = bpy.context.active_object
+    props = ob.curved_fold_mesh
+    before = np.array([v.co[:] for v in ob.data.vertices])
+    props.live = True
+    live._pending.clear()
+    for name in ("axial_stiffness", "panel_stiffness", "face_stiffness", "damping", "crease_stiffness"):
+        live._pending.clear()
+        setattr(props, name, getattr(props, name) * 0.5)
+        assert ob.name in live._pending, name  # every solve setting schedules a re-fold
+        setattr(props, name, getattr(props, name) * 2.0)
+    live._pending.clear()
+    props.crease_stiffness = 0.05  # much weaker creases against the same panels: a visibly different shape
+    assert live.run_pending() == {ob.name: "ok"}
+    after = np.array([v.co[:] for v in ob.data.vertices])
+    assert after.shape == before.shape and np.abs(after - before).max() > 1e-4
+    props.live = False
+
+
+def test_folds_are_named_after_the_pattern_and_placed_beside_the_last(extension, clean_scene):
+    objects = import_file(REPO / "examples" / "single_curve.svg")
+    made = []
+    for _ in range(2):
+        for ob in bpy.context.selected_objects:
+            ob.select_set(False)
+        for ob in objects:
+            ob.select_set(True)
+        assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+        made.append(bpy.context.active_object)
+    assert made[0].name == "single_curve Folded" and made[1].name.startswith("single_curve Folded")
+    bpy.context.view_layer.update()
+
+    def box(ob):
+        m = np.array(ob.matrix_world)
+        c = np.array([tuple(v) for v in ob.bound_box]) @ m[:3, :3].T + m[:3, 3]
+        return c[:, 0].min(), c[:, 0].max()
+
+    curves_right = max(box(ob)[1] for ob in objects)
+    assert box(made[0])[0] > curves_right
+    assert box(made[1])[0] > box(made[0])[1]  # no overlap with the last fold
+
+
+def test_exported_gltf_node_keeps_the_object_name(extension, clean_scene, tmp_path):
+    import_file(REPO / "examples" / "single_curve.svg")
+    assert bpy.ops.curved_fold.fold(collection="single_curve") == {"FINISHED"}
+    ob = bpy.context.active_object
+    path = tmp_path / "out.glb"
+    name = ob.name
+    assert bpy.ops.curved_fold.export_folded(filepath=str(path), file_format="GLB") == {"FINISHED"}
+    assert ob.name == name  # the user's object keeps its name
+    data = path.read_bytes()
+    length = struct.unpack_from("<I", data, 12)[0]
+    gltf = json.loads(data[20 : 20 + length])
+    assert ob.name in [node.get("name") for node in gltf["nodes"]]
+
+
+def test_every_operator_is_in_the_object_menu_and_files_can_be_dropped(extension):
+    source = Path(ext_module(extension, "operators.menus").__file__).read_text()
+    operators = [name for name in dir(bpy.ops.curved_fold) if not name.startswith("_")]
+    assert operators
+    for name in operators:
+        assert f'"curved_fold.{name}"' in source, name
+    assert "_menu" in [f.__name__ for f in bpy.types.VIEW3D_MT_object._dyn_ui_initialize()]
+    handler = bpy.types.FileHandler.bl_rna_get_subclass_py("CURVED_FOLD_FH_crease_pattern")
+    assert handler is not None
+    assert set(handler.bl_file_extensions.split(";")) == {".svg", ".fold"}
+    assert handler.bl_import_operator == "curved_fold.import_pattern"
+
+
+def test_dropped_files_are_all_imported(extension, clean_scene):
+    """What a drop on the viewport passes to the FileHandler's operator: a directory and file names."""
+    names = ["single_curve.svg", "curved_border.svg"]
+    result = bpy.ops.curved_fold.import_pattern(directory=str(REPO / "examples"), files=[{"name": n} for n in names])
+    assert result == {"FINISHED"}
+    assert {"single_curve", "curved_border"} <= set(bpy.data.collections.keys())
+    assert {ob.name for ob in bpy.context.selected_objects} == {
+        ob.name for n in names for ob in bpy.data.collections[Path(n).stem].objects
+    }
+
+
+def _groups():
+    yield bpy.types.Object.bl_rna.properties["curved_fold"].fixed_type
+    yield bpy.types.Object.bl_rna.properties["curved_fold_mesh"].fixed_type
+    for name in dir(bpy.ops.curved_fold):
+        if not name.startswith("_"):
+            yield getattr(bpy.ops.curved_fold, name).get_rna_type()
+
+
+def test_every_property_has_a_tooltip_and_results_are_not_animatable(extension):
+    missing = [
+        f"{group.identifier}.{p.identifier}"
+        for group in _groups()
+        for p in group.properties
+        if p.identifier != "rna_type" and not p.description and not p.is_hidden
+    ]
+    assert not missing, missing
+    mesh_props = bpy.types.Object.bl_rna.properties["curved_fold_mesh"].fixed_type.properties
+    for p in mesh_props:
+        if p.identifier.startswith("last_") or p.identifier in {"baked_frames", "is_fold_mesh"}:
+            assert not p.is_animatable, p.identifier
+    assert mesh_props["fold_percent"].is_animatable
+
+
+def test_show_colors_material_message(extension, clean_scene):
+    import_file(REPO / "examples" / "single_curve.svg")
+    assert bpy.ops.curved_fold.fold(collection="single_curve") == {"FINISHED"}
+    assert bpy.ops.curved_fold.show_colours(kind="NONE") == {"FINISHED"}
+    assert bpy.types.CURVED_FOLD_OT_show_colours.bl_label == "Show Fold Colors"
+
+
+def test_a_warning_is_reported_once(extension):
+    """``build_mesh`` starts its warnings with the pattern's; the report lists each once (it printed them twice)."""
+    model = ext_module(extension, "core.pattern.model")
+    discretize = ext_module(extension, "core.pattern.discretize").discretize
+    pipeline = ext_module(extension, "core.pipeline")
+    square = [[0.0, 0.0], [100.0, 0.0], [100.0, 100.0], [0.0, 100.0], [0.0, 0.0]]
+    border = model.CreaseCurve(
+        [model.CurveSegment("line", np.array([a, b])) for a, b in zip(square[:-1], square[1:], strict=True)],
+        "B",
+        None,
+        closed=True,
+    )
+    crease = model.CreaseCurve([model.CurveSegment("line", np.array([[0.0, 50.0], [100.0, 50.0]]))], "V", 90.0)
+    again = model.CreaseCurve([model.CurveSegment("line", np.array([[0.0, 50.0], [100.0, 50.0]]))], "M", -90.0)
+    pattern = discretize([border, crease, again])
+    assert pattern.warnings
+    warnings = pipeline.fold_pattern(pattern).report["warnings"]
+    assert len(warnings) == len(set(warnings)) and set(pattern.warnings) <= set(warnings)

@@ -2,16 +2,89 @@
 
 Data is written to a temporary file in the destination's own folder (so the final rename stays on one file system),
 flushed and fsynced, then moved over the destination with :func:`os.replace`, which is atomic on POSIX and Windows.
-If anything fails the temporary file is removed and the destination is left untouched. The file gets the mode a plain
-``open(path, "w")`` would give it (an existing file keeps its mode; a new one 0o666 less the umask), not the private
-0o600 of a temporary file.
+If anything fails the temporary file is removed and the destination is left untouched, byte for byte.
+
+* :func:`atomic_output` is the general form, for writers that insist on a path of their own (Blender's exporters):
+  it yields a temporary path with the destination's suffix, and moves it into place when the block ends cleanly.
+* :func:`atomic_write_bytes` / :func:`atomic_write_text` write data held in memory.
+* :func:`output_target` says what a write to a path would replace: a symlink is written *through* (its final target
+  is replaced, the link stays a link); a device, FIFO, socket or folder is refused (``--out /dev/sda`` must not turn
+  a disk node into a regular file, nor a FIFO hang the command line).
+* Temporary files alive at any moment are listed in a registry; :func:`install_signal_cleanup` makes SIGINT and
+  SIGTERM remove them before the process stops (``.NAME.xxxx.tmp.fold`` never survives a killed run).
+
+The file gets the mode a plain ``open(path, "w")`` would give it (an existing file keeps its mode; a new one 0o666
+less the umask), not the private 0o600 of a temporary file. Error messages name the user's path, never the
+temporary one.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
+import stat
 import tempfile
+import threading
+from collections.abc import Iterator
 from pathlib import Path
+
+_live_temporaries: set[str] = set()
+"""Temporary files being written right now (removed by the signal handlers of :func:`install_signal_cleanup`)."""
+
+_registry_lock = threading.Lock()
+
+
+class OutputError(OSError):
+    """A write that was refused or failed; the message names the user's path (``str(exc)`` is one line)."""
+
+    def __init__(self, message: str, errno: int | None = None) -> None:
+        super().__init__(message)
+        self.errno = errno  # type: ignore[misc]
+
+
+def _kind(mode: int) -> str:
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if stat.S_ISCHR(mode):
+        return "a character device"
+    if stat.S_ISBLK(mode):
+        return "a block device"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO (named pipe)"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def output_target(path: str | os.PathLike[str]) -> Path:
+    """The file a write to ``path`` replaces: symlinks resolved to their final target (even a dangling one, which is
+    then created); raises :class:`OutputError` for a device, FIFO, socket or folder, or a missing folder."""
+    user = Path(path)
+    target = Path(os.path.realpath(user))
+    try:
+        st = os.stat(target)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise OutputError(f"{user}: cannot write: {exc.strerror or exc}", exc.errno) from None
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        via = f" (the symlink points to {target})" if target != user.absolute() else ""
+        raise OutputError(f"{user}: is {_kind(st.st_mode)}{via}, not a regular file; refusing to write there")
+    if not target.parent.is_dir():
+        raise OutputError(f"{user}: cannot write: the folder {target.parent} does not exist")
+    return target
+
+
+def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """True when paths ``a`` and ``b`` name one file (through symlinks, ``..``, or hard links)."""
+    ra, rb = os.path.realpath(a), os.path.realpath(b)
+    if ra == rb:
+        return True
+    try:
+        return os.path.samefile(ra, rb)
+    except OSError:
+        return False
 
 
 def _final_mode(dest: Path) -> int:
@@ -24,30 +97,121 @@ def _final_mode(dest: Path) -> int:
         return 0o666 & ~umask
 
 
+def _fsync_folder(folder: Path) -> None:
+    """Make the rename durable (POSIX; a no-op where folders cannot be opened)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _remove(name: str) -> None:
+    with contextlib.suppress(OSError):
+        os.unlink(name)
+    with _registry_lock:
+        _live_temporaries.discard(name)
+
+
+def _name_user_path(exc: BaseException, tmp: str, user: Path) -> None:
+    """Rewrite an exception's message in place so it names ``user`` instead of the temporary file ``tmp``."""
+    if isinstance(exc, OSError) and exc.filename == tmp:
+        exc.filename = str(user)
+    exc.args = tuple(a.replace(tmp, str(user)) if isinstance(a, str) else a for a in exc.args)
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path beside ``path`` (same suffix, so exporters pick the same format); when the block ends
+    without an exception the file written there is fsynced and moved over ``path`` (through symlinks).
+
+    If the block raises, or nothing was written, the temporary file is removed and ``path`` keeps its old bytes.
+    Exceptions leave with their messages naming ``path``, not the temporary file. Nest two of these to write a
+    pair of files all-or-nothing: the inner one is moved into place first, and a failure there also discards the
+    outer one.
+    """
+    user = Path(path)
+    dest = output_target(user)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=f".tmp{dest.suffix}", dir=dest.parent)
+    except OSError as exc:
+        raise OutputError(f"{user}: cannot write: {exc.strerror or exc}", exc.errno) from None
+    os.close(fd)
+    with _registry_lock:
+        _live_temporaries.add(tmp)
+    try:
+        try:
+            yield Path(tmp)
+        except BaseException as exc:
+            _name_user_path(exc, tmp, user)
+            raise
+        try:
+            size = os.path.getsize(tmp)
+        except OSError:
+            size = -1
+        if size <= 0:
+            raise OutputError(f"{user}: the writer produced no data; the old file (if any) is kept")
+        try:
+            with open(tmp, "rb+") as fh:
+                os.fsync(fh.fileno())
+            os.chmod(tmp, _final_mode(dest))
+            os.replace(tmp, dest)
+        except OSError as exc:
+            raise OutputError(f"{user}: cannot write: {exc.strerror or exc}", exc.errno) from None
+        _fsync_folder(dest.parent)
+    finally:
+        _remove(tmp)
+
+
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
     """Write ``data`` to ``path`` atomically; returns the resolved destination path.
 
-    Raises :class:`OSError` (e.g. the folder does not exist or is not writable) without leaving a temp file behind.
+    Raises :class:`OutputError` (an :class:`OSError`: the folder does not exist or is not writable, the disk is
+    full, the target is a device) naming ``path``, without leaving a temporary file behind.
     """
-    dest = Path(path)
-    folder = dest.parent if str(dest.parent) else Path(".")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp_name, _final_mode(dest))
-        os.replace(tmp_name, dest)
-    except BaseException:
+    with atomic_output(path) as tmp:
         try:
-            os.unlink(tmp_name)
-        except OSError:
-            pass
-        raise
-    return dest.resolve()
+            with open(tmp, "wb") as fh:
+                fh.write(data)
+                fh.flush()
+        except OSError as exc:
+            raise OutputError(f"{path}: cannot write: {exc.strerror or exc}", exc.errno) from None
+    return output_target(path)
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str, encoding: str = "utf-8") -> Path:
     """Write ``text`` to ``path`` atomically (UTF-8 by default); returns the resolved destination path."""
     return atomic_write_bytes(path, text.encode(encoding))
+
+
+def remove_live_temporaries() -> None:
+    """Remove every temporary file an :func:`atomic_output` is writing right now (for signal handlers)."""
+    with _registry_lock:
+        names = list(_live_temporaries)
+    for name in names:
+        _remove(name)
+
+
+def install_signal_cleanup() -> None:
+    """Make SIGINT and SIGTERM remove live temporary files, then stop the run: SIGINT raises
+    :class:`KeyboardInterrupt`, SIGTERM :class:`SystemExit` (status 143), so ``finally`` blocks also run.
+
+    Only from the main thread (Python's rule for signal handlers); elsewhere this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+
+    def on_signal(signum: int, frame: object) -> None:
+        remove_live_temporaries()
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise SystemExit(128 + signum)
+
+    signal.signal(signal.SIGINT, on_signal)
+    if hasattr(signal, "SIGTERM"):
+        signal.signal(signal.SIGTERM, on_signal)

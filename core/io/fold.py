@@ -30,6 +30,7 @@ import numpy as np
 from ..mesh.fold_mesh import FoldMesh
 from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
 from .atomic import atomic_write_text
+from .fold_validate import load_fold_json
 
 UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "pt": 25.4 / 72.0, "um": 1e-3, "nm": 1e-6, "unit": 1.0}
 """Millimetres per FOLD ``frame_unit``; ``unit`` (unitless, the FOLD default) is taken as millimetres."""
@@ -127,12 +128,7 @@ def _angles(value: Any, name: str, source: str) -> np.ndarray:
 def parse_fold(text: str, source_name: str = "<fold>") -> FoldDocument:
     """Check and convert FOLD JSON text (see :class:`FoldDocument`)."""
     src = source_name
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise _fail(src, f"malformed JSON at line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
-    if not isinstance(data, dict):
-        raise _fail(src, "a FOLD file must be a JSON object")
+    data = load_fold_json(text, src)  # strict types, ranges and size limits, with locations (fold_validate.py)
     warnings: list[str] = []
     unit = str(data.get("frame_unit", "unit"))
     if unit not in UNIT_MM:

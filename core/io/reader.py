@@ -10,11 +10,13 @@ registers its reader (``scene.curves.read_blend_file``) with :func:`register_ble
 from __future__ import annotations
 
 import os
+import stat
 from collections.abc import Callable
 from pathlib import Path
 
 from ..pattern.discretize import discretize
 from ..pattern.model import CreaseCurve, CreasePattern, PatternError
+from . import limits
 
 SUFFIXES = (".svg", ".fold", ".blend")
 
@@ -43,9 +45,54 @@ def _suffix(path: Path) -> str:
         raise PatternError(
             f"{path.name}: unknown file type {path.suffix or '(no suffix)'!r}; expected one of {', '.join(SUFFIXES)}"
         )
-    if not path.is_file():
-        raise PatternError(f"{path}: no such file")
+    st = _check_regular(path)
+    if suffix != ".blend":  # a .blend file is opened by Blender, which reads only what it needs
+        limits.check_file_size(st.st_size, str(path))
     return suffix
+
+
+def _check_regular(path: Path) -> os.stat_result:
+    """The file's status; a missing file, a folder, FIFO or device raises :class:`PatternError` (a FIFO would
+    block the reader forever, a device could be endless)."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise PatternError(f"{path}: no such file") from None
+    except OSError as exc:
+        raise PatternError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(st.st_mode):
+        kind = (
+            "a folder"
+            if stat.S_ISDIR(st.st_mode)
+            else "a FIFO (named pipe)"
+            if stat.S_ISFIFO(st.st_mode)
+            else "a device or socket"
+        )
+        raise PatternError(f"{path}: is {kind}, not a regular file")
+    return st
+
+
+GZIP_MAGIC = b"\x1f\x8b"
+ZIP_MAGIC = b"PK\x03\x04"
+
+
+def read_input_bytes(path: str | os.PathLike[str], kind: str) -> bytes:
+    """The bytes of an input file of type ``kind`` (``"SVG"``, ``"FOLD"``), checked first: a regular file, not
+    above :data:`.limits.FILE_MB`, not compressed (``.svgz`` or a gzip/zip archive gets a message saying so)."""
+    p = Path(path)
+    st = _check_regular(p)
+    limits.check_file_size(st.st_size, str(p))
+    try:
+        with open(p, "rb") as fh:
+            data = fh.read(limits.FILE_MB.value * 1024 * 1024 + 1)  # the file may have grown since stat
+    except OSError as exc:
+        raise PatternError(f"{p}: cannot read {kind} file: {exc.strerror or exc}") from None
+    limits.check_file_size(len(data), str(p))
+    if data.startswith(GZIP_MAGIC):
+        raise PatternError(f"{p.name}: gzip-compressed data, not a plain {kind} file; decompress it first (gunzip)")
+    if data.startswith(ZIP_MAGIC):
+        raise PatternError(f"{p.name}: a zip archive, not a plain {kind} file; extract it first")
+    return data
 
 
 def read_curves(path: str | os.PathLike[str]) -> tuple[list[CreaseCurve], list[str]]:

@@ -18,6 +18,11 @@ What is read:
 
 Each sub-path (or element) becomes one :class:`~.pattern.CreaseCurve` of exact segments: quadratic Béziers are
 degree-elevated to cubics, elliptical arcs stay arcs (an affine image of an ellipse is recomputed exactly).
+
+Hostile files are read in bounded time and memory: text is kept only inside ``<style>`` (gathered in a list and
+joined once), the CSS and comment scanners are single passes (no backtracking regular expression), the tree is
+walked with an explicit stack, and the file size, element count, nesting depth and number of path segments are
+limited (:mod:`.limits`, each raised by an environment variable named in the message).
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pattern.model import CreaseCurve, CurveSegment, PatternError
+from . import limits
 
 PX_MM = 25.4 / 96.0
 """Millimetres per CSS pixel (one SVG user unit when the file gives no physical size)."""
@@ -146,8 +152,17 @@ def _parse_xml(text: str | bytes, source_name: str) -> _Element:
     parser = xml.parsers.expat.ParserCreate(namespace_separator="}")
     stack: list[_Element] = []
     root: list[_Element] = []
+    texts: list[list[str] | None] = []  # per open element: its text pieces (``<style>`` only), joined at the end tag
+    max_elements, max_depth = limits.SVG_ELEMENTS.value, limits.NESTING.value
+    count = 0
 
     def start(name: str, attrs: dict[str, str]) -> None:
+        nonlocal count
+        count += 1
+        if count > max_elements:
+            limits.SVG_ELEMENTS.check(count, f"{source_name} (line {parser.CurrentLineNumber})")
+        if len(stack) >= max_depth:
+            limits.NESTING.check(len(stack) + 1, f"{source_name} (line {parser.CurrentLineNumber})")
         tag, _ = _local(name)
         attrib = {}
         for key, value in attrs.items():
@@ -162,13 +177,16 @@ def _parse_xml(text: str | bytes, source_name: str) -> _Element:
         else:
             root.append(elem)
         stack.append(elem)
+        texts.append([] if elem.tag == "style" else None)
 
     def end(name: str) -> None:
-        stack.pop()
+        elem, pieces = stack.pop(), texts.pop()
+        if pieces:
+            elem.text = "".join(pieces)
 
     def chars(data: str) -> None:
-        if stack:
-            stack[-1].text += data
+        if texts and texts[-1] is not None:
+            texts[-1].append(data)
 
     parser.StartElementHandler = start
     parser.EndElementHandler = end
@@ -188,7 +206,49 @@ def _parse_xml(text: str | bytes, source_name: str) -> _Element:
 # ----------------------------------------------------------------------------------------------------- CSS
 
 
-_COMMENT = re.compile(r"/\*.*?\*/", re.S)
+def _strip_comments(text: str) -> str:
+    """``text`` without ``/* ... */`` comments (an unclosed one runs to the end), in one pass."""
+    out: list[str] = []
+    pos = 0
+    while True:
+        i = text.find("/*", pos)
+        if i < 0:
+            out.append(text[pos:])
+            break
+        out.append(text[pos:i])
+        j = text.find("*/", i + 2)
+        if j < 0:
+            break
+        pos = j + 2
+    return "".join(out)
+
+
+def _css_blocks(text: str) -> list[tuple[str, str]]:
+    """(prelude, body) of every top-level ``prelude { body }`` block, in one pass over the braces.
+
+    Nested blocks (``@media { a { } }``) stay inside their parent's body; a block left open at the end of the
+    sheet is closed there (as CSS does); stray ``}`` are ignored.
+    """
+    blocks: list[tuple[str, str]] = []
+    depth = 0
+    start = body_start = 0
+    prelude = ""
+    for m in re.finditer(r"[{}]", text):
+        if m.group() == "{":
+            if depth == 0:
+                prelude, body_start = text[start : m.start()], m.end()
+            depth += 1
+        elif depth == 0:
+            start = m.end()
+        else:
+            depth -= 1
+            if depth == 0:
+                blocks.append((prelude, text[body_start : m.start()]))
+                start = m.end()
+    if depth:
+        blocks.append((prelude, text[body_start:]))
+    return blocks
+
 _SIMPLE_SELECTOR = re.compile(r"^(?P<type>[A-Za-z][\w-]*|\*)?(?P<rest>(?:[.#][\w-]+)*)$")
 
 
@@ -215,11 +275,15 @@ def _parse_declarations(text: str) -> dict[str, str]:
 def _parse_stylesheet(text: str, warnings: list[str], where: str) -> list[_Rule]:
     """Rules of a ``<style>`` sheet; selectors other than simple ``type.class#id`` ones are skipped with a warning."""
     rules: list[_Rule] = []
-    text = _COMMENT.sub("", text).replace("<![CDATA[", "").replace("]]>", "")
+    text = _strip_comments(text.replace("<![CDATA[", "").replace("]]>", ""))
     skipped: list[str] = []
-    for match in re.finditer(r"([^{}]+)\{([^}]*)\}", text):
-        selectors, body = match.group(1), match.group(2)
+    at_rules: list[str] = []
+    for prelude, body in _css_blocks(text):
+        # statement at-rules (``@import url(x.css);``) end with ';' and belong to no block: skip them, not the rule
+        *statements, selectors = prelude.split(";")
+        at_rules += [st.strip().split(None, 1)[0] for st in statements if st.strip().startswith("@")]
         if selectors.strip().startswith("@"):
+            at_rules.append(selectors.strip().split(None, 1)[0])
             continue
         decls = _parse_declarations(body)
         for sel in selectors.split(","):
@@ -244,7 +308,11 @@ def _parse_stylesheet(text: str, warnings: list[str], where: str) -> list[_Rule]
                 )
             )
     if skipped:
-        warnings.append(f"{where}: CSS selectors not supported (rules ignored): {', '.join(sorted(set(skipped)))}")
+        shown = sorted(set(skipped))
+        more = f", ... ({len(shown) - 8} more)" if len(shown) > 8 else ""
+        warnings.append(f"{where}: CSS selectors not supported (rules ignored): {', '.join(shown[:8])}{more}")
+    if at_rules:
+        warnings.append(f"{where}: CSS at-rules not followed: {', '.join(sorted(set(at_rules))[:8])}")
     return rules
 
 
@@ -490,12 +558,15 @@ def _arc_centre(
     return (cx, cy, rx, ry, phi, theta0, dtheta)
 
 
-def parse_path_data(d: str, where: str) -> list[tuple[list[_Raw], bool]]:
+def parse_path_data(d: str, where: str, max_segments: int | None = None) -> list[tuple[list[_Raw], bool]]:
     """Sub-paths of SVG path data as (raw segments in user units, closed) pairs.
 
     Handles every command, absolute and relative, implicit repeats (extra pairs after M are L), smooth control
-    point reflection for S/T, and Z returning to the sub-path start. Errors name the offending token.
+    point reflection for S/T, and Z returning to the sub-path start. Errors name the offending token. More than
+    ``max_segments`` commands (default: the :data:`.limits.PATH_SEGMENTS` limit) raise :class:`PatternError`.
     """
+    budget = limits.PATH_SEGMENTS.value if max_segments is None else max_segments
+    steps = 0
     sc = _PathScanner(d, where)
     subpaths: list[tuple[list[_Raw], bool]] = []
     segs: list[_Raw] = []
@@ -514,6 +585,13 @@ def parse_path_data(d: str, where: str) -> list[tuple[list[_Raw], bool]]:
         segs, closed = [], False
 
     while not sc.at_end():
+        steps += 1
+        if steps > budget:
+            raise PatternError(
+                f"{where}: more than {budget:,} path segments (the rest of the file's budget under the limit of "
+                f"{limits.PATH_SEGMENTS.value:,}; set the environment variable {limits.PATH_SEGMENTS.variable} "
+                "to raise it)"
+            )
         letter = sc.peek_command()
         if letter is not None:
             if letter not in "MmLlHhVvCcSsQqTtAaZz":
@@ -657,7 +735,7 @@ def _attr_float(elem: _Element, name: str, where: str, default: float | None = 0
         if default is None:
             raise PatternError(f"{where}: missing attribute {name}")
         return default
-    m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(px)?\s*", value)
+    m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)(?:\s*px)?", value.strip())
     if not m:
         raise PatternError(f"{where}: attribute {name}={value!r} is not a number in user units")
     return float(m.group(1))
@@ -683,17 +761,19 @@ def _ellipse_arcs(cx: float, cy: float, rx: float, ry: float) -> list[_Raw]:
     ]
 
 
-def _shape_subpaths(elem: _Element, where: str) -> list[tuple[list[_Raw], bool]]:
-    """Raw sub-paths (user units) of one shape element."""
+def _shape_subpaths(elem: _Element, where: str, budget: int | None = None) -> list[tuple[list[_Raw], bool]]:
+    """Raw sub-paths (user units) of one shape element (a path of more than ``budget`` commands raises)."""
     tag = elem.tag
     if tag == "path":
-        return parse_path_data(elem.attrib.get("d", ""), where)
+        return parse_path_data(elem.attrib.get("d", ""), where, budget)
     if tag == "line":
         p0 = np.array([_attr_float(elem, "x1", where), _attr_float(elem, "y1", where)])
         p1 = np.array([_attr_float(elem, "x2", where), _attr_float(elem, "y2", where)])
         return [([("line", p0, p1)], False)]
     if tag in ("polyline", "polygon"):
         pts = _points_attr(elem, where)
+        if budget is not None and len(pts) > budget:
+            limits.PATH_SEGMENTS.check(limits.PATH_SEGMENTS.value + len(pts) - budget, where)
         segs: list[_Raw] = [("line", pts[i], pts[i + 1]) for i in range(len(pts) - 1)]
         closed = tag == "polygon" and len(pts) > 2
         if closed and not np.array_equal(pts[-1], pts[0]):
@@ -763,7 +843,7 @@ def _length_mm(value: str | None) -> tuple[float | None, bool]:
     """(millimetres, has a physical unit) for a width/height value; (None, False) if absent or a percentage."""
     if value is None:
         return None, False
-    m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z%]*)\s*", value)
+    m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z%]*)", value.strip())
     if not m:
         return None, False
     unit = m.group(2).lower()
@@ -832,21 +912,23 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
     warnings: list[str] = []
     rules: list[_Rule] = []
 
-    def collect_styles(elem: _Element) -> None:
+    pending = [root]  # document order, with an explicit stack (nesting depth is bounded by limits.NESTING anyway)
+    while pending:
+        elem = pending.pop()
         if elem.tag == "style":
             rules.extend(_parse_stylesheet(elem.text, warnings, f"{source_name} <style> (line {elem.line})"))
-        for child in elem.children:
-            collect_styles(child)
-
-    collect_styles(root)
+        pending.extend(reversed(elem.children))
     for i, r in enumerate(rules):
         r.order = i
     viewport, width_mm, height_mm = _viewport(root, source_name)
     curves: list[CreaseCurve] = []
     unknown: dict[str, list[int]] = {}
     uses: list[int] = []
+    segment_budget = limits.PATH_SEGMENTS.value
 
     def visit(elem: _Element, matrix: np.ndarray, inherited: dict[str, str]) -> None:
+        """Read one element; its children go on ``todo`` (an explicit stack, not recursion)."""
+        nonlocal segment_budget
         if elem.tag.startswith("#foreign:") or elem.tag in SKIPPED_CONTAINERS:
             return
         where = _describe(elem)
@@ -865,7 +947,10 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
         if elem.tag in SHAPES:
             stroke = style.get("stroke")
             assignment = stroke_assignment(stroke)
-            subpaths = _shape_subpaths(elem, where)
+            subpaths = _shape_subpaths(elem, where, segment_budget)
+            segment_budget -= sum(len(segs) for segs, _ in subpaths)
+            if segment_budget < 0:
+                limits.PATH_SEGMENTS.check(limits.PATH_SEGMENTS.value - segment_budget, f"{source_name} ({where})")
             if not subpaths:
                 return
             if assignment is None:
@@ -888,10 +973,11 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
                 segments = [_to_segment(r, matrix) for r in raw_segs]
                 curves.append(CreaseCurve(segments, assignment, angle, closed=closed, source=source))
             return
-        for child in elem.children:
-            visit(child, matrix, style)
+        todo.extend((child, matrix, style) for child in reversed(elem.children))
 
-    visit(root, viewport, {})
+    todo: list[tuple[_Element, np.ndarray, dict[str, str]]] = [(root, viewport, {})]
+    while todo:
+        visit(*todo.pop())
     if unknown:
         parts = []
         for colour, lines in unknown.items():
@@ -913,9 +999,7 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
 
 def read_svg(path: str | Path) -> SvgDrawing:
     """Read an SVG file in Origami Simulator's convention into crease curves (mm, y up). See :func:`parse_svg_text`."""
+    from .reader import read_input_bytes
+
     p = Path(path)
-    try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise PatternError(f"{p}: cannot read SVG file: {exc.strerror or exc}") from None
-    return parse_svg_text(data, p.name)
+    return parse_svg_text(read_input_bytes(p, "SVG"), p.name)

@@ -35,10 +35,18 @@ def _enable_blend_files() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the process exit code (0 ok, 2 bad input)."""
+    """Run the command line; returns the process exit code (0 ok, 2 bad input or a failed write, 130 interrupted).
+
+    Every expected failure is one line on stderr, never a traceback: bad input (:class:`PatternError`), a file
+    that cannot be read or written (:class:`OSError`, naming the user's path), exhausted memory (a pattern too big
+    for this machine) and too-deep recursion. SIGINT and SIGTERM remove any half-written temporary file first.
+    """
+    from ..core.io.atomic import install_signal_cleanup
+
     parser = build_parser()
     args = parser.parse_args(argv)
     _enable_blend_files()
+    install_signal_cleanup()
     try:
         return int(args.func(args) or 0)
     except PatternError as exc:
@@ -47,6 +55,22 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         print(f"curved_fold: error: {exc}", file=sys.stderr)
         return 2
+    except MemoryError:
+        print(
+            "curved_fold: error: out of memory: the pattern is too large for this machine; pass a larger "
+            "--interval and --tolerance, or split the pattern",
+            file=sys.stderr,
+        )
+        return 2
+    except RecursionError:
+        print("curved_fold: error: the input is nested too deeply to process", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("curved_fold: interrupted (unfinished temporary files removed)", file=sys.stderr)
+        return 130
+    except SystemExit as exc:  # only SIGTERM raises it here (argparse's exits happen above)
+        print("curved_fold: terminated (unfinished temporary files removed)", file=sys.stderr)
+        raise exc
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -8,9 +8,12 @@ and from curves, every warning, and where the file went. Bad input exits with co
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from ..core.pattern.model import ASSIGNMENT_NAMES, ASSIGNMENTS, PatternError
+from .outputs import check_outputs
+from .progress import Progress
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,6 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--interval", type=float, default=None, help="maximum chord / border piece length, mm")
     p.add_argument("--tolerance", type=float, default=None, help="maximum curve-to-chord distance, mm")
     p.add_argument("--merge", type=float, default=None, help="merge vertices closer than this, mm")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors (no summary, no progress)")
     p.set_defaults(func=run)
 
 
@@ -42,17 +46,22 @@ def run(args: argparse.Namespace) -> int:
         raise PatternError(f"--out {out}: the output must be a .fold file")
     for name in ("interval", "tolerance", "merge"):
         value = getattr(args, name)
-        if value is not None and not value > 0:
+        if value is not None and not (value > 0 and math.isfinite(value)):
             raise PatternError(f"--{name} {value:g}: must be a positive number of mm")
+    check_outputs(path, {"--out": out})
     t0 = time.perf_counter()
     is_fold = path.suffix.lower() == ".fold"
-    if is_fold:
-        pattern = read_pattern(path)
-    else:
-        curves, warnings = read_curves(path)
-        pattern = discretize(curves, interval=args.interval, tolerance=args.tolerance, merge_tolerance=args.merge)
-        pattern.warnings = warnings + pattern.warnings
+    with Progress(quiet=args.quiet).stage(f"reading and discretising {path.name}"):
+        if is_fold:
+            pattern = read_pattern(path)
+        else:
+            curves, warnings = read_curves(path)
+            pattern = discretize(curves, interval=args.interval, tolerance=args.tolerance, merge_tolerance=args.merge)
+            pattern.warnings = warnings + pattern.warnings
     ms = (time.perf_counter() - t0) * 1e3
+    if args.quiet:
+        write_pattern_fold(out, pattern)
+        return 0
     print(f"read {path} ({ms:.0f} ms)")
     if is_fold:
         print("parameters: none (a FOLD file is already straight segments)")

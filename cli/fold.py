@@ -3,10 +3,17 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import math
+import os
+from collections.abc import Iterator
 from pathlib import Path
 
+from ..core.io.atomic import OutputError, atomic_output
 from ..core.pattern.model import PatternError
+from .outputs import check_complete, check_outputs, finite_json
+from .progress import Progress
 
 OUTPUT_SUFFIXES = (".fold", ".obj", ".glb", ".blend")
 
@@ -16,14 +23,88 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("fold", help="fold a crease pattern (.svg/.fold/.blend) and write the folded mesh")
     p.add_argument("input", help="crease pattern: .svg, .fold or .blend")
     p.add_argument("--out", required=True, help="output: .fold, .obj, .glb or .blend")
-    p.add_argument("--angle", type=float, default=None, help="fold angle (deg) for creases without one")
+    p.add_argument("--angle", type=float, default=None, help="fold angle (deg, -180..180) for creases without one")
     p.add_argument("--percent", type=float, default=100.0, help="fold percent, 0–100 (default 100)")
     p.add_argument("--interval", type=float, default=None, help="max chord length of discretised curves (mm)")
     p.add_argument("--tolerance", type=float, default=None, help="max curve deviation of a chord (mm)")
     p.add_argument("--mesh", default="ruling", choices=("ruling", "cdt", "earcut"), help="triangulation")
     p.add_argument("--solver", default="fast", choices=("fast", "faithful", "isometric"), help="solver method")
     p.add_argument("--report", default=None, help="write the report as JSON here")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors (no summary, no progress)")
     p.set_defaults(func=run)
+
+
+def _check_numbers(args: argparse.Namespace) -> None:
+    """``--percent`` in [0, 100] and ``--angle`` in [−180, 180] degrees, both finite (150 % would set 270° targets)."""
+    if not (math.isfinite(args.percent) and 0.0 <= args.percent <= 100.0):
+        raise PatternError(f"--percent {args.percent:g}: must be a number from 0 to 100")
+    if args.angle is not None and not (math.isfinite(args.angle) and -180.0 <= args.angle <= 180.0):
+        shown = f"{args.angle:.6g}" if math.isfinite(args.angle) else str(args.angle)
+        raise PatternError(f"--angle {shown}: must be a number of degrees from -180 to 180")
+
+
+def _last_error_line(exc: BaseException) -> str:
+    """The informative line of an exporter's error: Blender wraps Python tracebacks in the message, whose last
+    line (``OSError: [Errno 28] No space left on device``) says what happened."""
+    lines = [x.strip() for x in str(exc).splitlines() if x.strip() and not x.strip().startswith("Location:")]
+    return lines[-1] if lines else type(exc).__name__
+
+
+class _Captured:
+    failed = False
+
+
+@contextlib.contextmanager
+def _exporter_output(tmp: Path, out: Path, quiet: bool) -> Iterator[_Captured]:
+    """Catch what Blender's exporters print on file descriptors 1 and 2 (they name the temporary file, and a
+    failing glTF export prints a whole traceback): on success it is passed on with the user's path in place of
+    the temporary one; on failure it is dropped, the one-line error says what happened."""
+    import sys
+    import tempfile
+
+    log = _Captured()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 1)
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield log
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+            if not log.failed and not quiet:
+                sink.seek(0)
+                text = sink.read().decode("utf-8", "replace").replace(str(tmp), str(out)).replace(tmp.name, out.name)
+                sys.stdout.write(text)
+
+
+def _write_mesh(tmp: Path, out: Path, fold, quiet: bool = False) -> None:
+    """Write the folded mesh to the temporary path ``tmp`` in the format of ``out``'s suffix."""
+    if out.suffix.lower() == ".fold":
+        from ..core.io.fold import write_folded_fold
+
+        write_folded_fold(tmp, fold.mesh, [fold.result.positions], [fold.result.fold_angles])
+        return
+    try:
+        from ..scene.export import export_folded_file
+    except ImportError as exc:  # pragma: no cover - depends on the Blender side being installed
+        raise PatternError(f"--out {out}: {out.suffix} output needs Blender's bpy ({exc})") from exc
+    with _exporter_output(tmp, out, quiet) as log:
+        try:
+            export_folded_file(tmp, fold.mesh, fold.result.positions, fold_angles=fold.result.fold_angles)
+        except (RuntimeError, OSError) as exc:  # Blender operators raise RuntimeError("Error: ..."), .blend OSError
+            log.failed = True
+            raise OutputError(f"--out {out}: Blender's {out.suffix} exporter failed: {_last_error_line(exc)}") from None
+    try:
+        check_complete(tmp, out.suffix, fold.mesh.n_vertices)
+    except OSError as exc:
+        raise OutputError(f"--out {out}: {exc}; the old file (if any) is kept") from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -33,26 +114,25 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in OUTPUT_SUFFIXES:
         raise PatternError(f"--out {out}: unknown output type {out.suffix!r}; use one of {', '.join(OUTPUT_SUFFIXES)}")
-    pattern = read_pattern(args.input, interval=args.interval, tolerance=args.tolerance)
-    fold = fold_pattern(
-        pattern, angle=args.angle, percent=args.percent / 100.0, mesh_type=args.mesh, solver=args.solver
-    )
+    _check_numbers(args)
+    check_outputs(args.input, {"--out": out, "--report": args.report})
+    progress = Progress(quiet=args.quiet)
+    with progress.stage(f"reading {Path(args.input).name}"):
+        pattern = read_pattern(args.input, interval=args.interval, tolerance=args.tolerance)
+    with progress.stage(f"folding {pattern.n_edges:,} segments (meshing, then solving)"):
+        fold = fold_pattern(
+            pattern, angle=args.angle, percent=args.percent / 100.0, mesh_type=args.mesh, solver=args.solver
+        )
     r = fold.report
-    if out.suffix.lower() == ".fold":
-        from ..core.io.fold import write_folded_fold
-
-        write_folded_fold(out, fold.mesh, [fold.result.positions], [fold.result.fold_angles])
-    else:
-        try:
-            from ..scene.export import export_folded_file
-        except ImportError as exc:  # pragma: no cover - depends on the Blender side being installed
-            raise PatternError(f"--out {out}: {out.suffix} output needs Blender's bpy ({exc})") from exc
-        export_folded_file(out, fold.mesh, fold.result.positions, fold_angles=fold.result.fold_angles)
-    if args.report:
-        from ..core.io.atomic import atomic_write_text
-
-        clean = {k: (None if isinstance(v, float) and v != v else v) for k, v in r.items()}  # NaN is not JSON
-        atomic_write_text(args.report, json.dumps(clean, indent=2, default=float))
+    # both files or neither: the report is moved into place first, and if that fails the mesh is not written
+    with atomic_output(out) as tmp_out, contextlib.ExitStack() as stack:
+        _write_mesh(tmp_out, out, fold, args.quiet)
+        if args.report:
+            tmp_report = stack.enter_context(atomic_output(args.report))
+            text = json.dumps(finite_json(r), indent=2, allow_nan=False)
+            tmp_report.write_text(text + "\n", encoding="utf-8")
+    if args.quiet:
+        return 0
     print(
         f"{args.input}: {r['faces']} faces ({r['mesh_type']}, {r['generation_ms']:.0f} ms), "
         f"{r['solver']} solver {r['simulation_ms']:.0f} ms, {r['iterations']} iterations, "

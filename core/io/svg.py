@@ -249,6 +249,7 @@ def _css_blocks(text: str) -> list[tuple[str, str]]:
         blocks.append((prelude, text[body_start:]))
     return blocks
 
+
 _SIMPLE_SELECTOR = re.compile(r"^(?P<type>[A-Za-z][\w-]*|\*)?(?P<rest>(?:[.#][\w-]+)*)$")
 
 

@@ -52,7 +52,7 @@ clean:
 bench: setup
 	$(PY) -m curved_fold.benchmarks.run
 
-# Long property-based fuzz of the engine (docs/errors.md); the CI profile is tests/test_fuzz.py.
+# Long property-based fuzz of the engine and of the FOLD/SVG readers (docs/errors.md); the CI profile is tests/test_fuzz.py.
 .PHONY: fuzz
 fuzz: setup
-	$(PY) tools/fuzz_long.py --examples 2000 --seed 1
+	$(PY) tools/fuzz_long.py --examples 2000 --readers 3000 --seed 1

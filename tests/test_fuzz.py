@@ -13,6 +13,7 @@ fails. The CI profile (``test_fuzz_quick``) is bounded to about a minute; the lo
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import time
@@ -209,3 +210,175 @@ def test_classify_error_knows_the_catalogue() -> None:
     assert classify_error("the border crosses or touches itself at (1.0, 2.0) mm (x)") == "border crosses itself"
     assert classify_error("triangulation: no paper left: the border does not enclose any region") == "no paper"
     assert classify_error("something new went wrong") is None
+
+
+# ------------------------------------------------------------------------------------------------ file readers
+#
+# Property-based fuzz of the two text readers (issue 16): any FOLD JSON and any SVG text, however wrong its types,
+# nesting or sizes, must either be read or be refused with one PatternError, never another exception.
+
+from curved_fold.core.io.fold import fold_to_pattern, parse_fold  # noqa: E402
+from curved_fold.core.io.svg import parse_svg_text  # noqa: E402
+
+FOLD_KEYS = [
+    "vertices_coords",
+    "edges_vertices",
+    "edges_assignment",
+    "edges_foldAngle",
+    "edges_foldAngles",
+    "faces_vertices",
+    "file_frames",
+    "frame_unit",
+    "frame_parent",
+    "frame_inherit",
+    "curved_fold:flat_coords",
+    "curved_fold:edge_polyline",
+    "curved_fold:edge_from_curve",
+    "curved_fold:sources",
+    "curved_fold:warnings",
+    "curved_fold:fold_angles",
+    "curved_fold:mesh_type",
+]
+
+json_scalars = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(min_value=-(10**30), max_value=10**30),
+    st.sampled_from([0, 1, 2, 3, -1, 4, 1.5, 1e308, -1e308, 10**400, 180, 181, -540]),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.sampled_from(["B", "M", "V", "F", "U", "C", "b", "x", "", "1", "mm", "cm", "in", "unit", "ruling"]),
+)
+json_values = st.recursive(
+    json_scalars,
+    lambda children: st.one_of(
+        st.lists(children, max_size=6),
+        st.dictionaries(st.sampled_from(FOLD_KEYS + ["x", "frame_classes"]), children, max_size=4),
+    ),
+    max_leaves=40,
+)
+
+
+@st.composite
+def fold_documents(draw) -> str:
+    """FOLD text: a valid square crease pattern with some fields replaced by anything (wrong types, nesting,
+    out-of-range numbers, huge integers), some dropped, or the text cut or nested deeply."""
+    n = draw(st.integers(min_value=0, max_value=6))
+    coords = [[float(i % 3), float(i // 3)] for i in range(n)]
+    doc: dict = {
+        "vertices_coords": coords,
+        "edges_vertices": [[i, (i + 1) % max(n, 1)] for i in range(n)],
+        "edges_assignment": ["B"] * n,
+    }
+    for key in draw(st.lists(st.sampled_from(FOLD_KEYS), max_size=4)):
+        if draw(st.booleans()):
+            doc[key] = draw(json_values)
+        else:
+            doc.pop(key, None)
+    text = json.dumps(doc, allow_nan=True) if draw(st.integers(0, 9)) else "[" * draw(st.sampled_from([1, 900, 5000]))
+    mode = draw(st.sampled_from(["whole"] * 8 + ["cut", "nest"]))
+    if mode == "cut":
+        text = text[: draw(st.integers(min_value=0, max_value=len(text)))]
+    elif mode == "nest":
+        depth = draw(st.sampled_from([1, 70, 400, 1200, 3000]))
+        text = '{"x": ' + "[" * depth + "]" * depth + ', "vertices_coords": []}'
+    return text
+
+
+def read_fold_text(text: str) -> str:
+    """Read FOLD text as the command line does; returns "read" or "refused" (any other exception propagates)."""
+    try:
+        doc = parse_fold(text, "fuzz.fold")
+        if doc.vertices is not None:
+            fold_to_pattern(doc)
+    except PatternError:
+        return "refused"
+    return "read"
+
+
+SVG_TAGS = ["g", "path", "line", "rect", "circle", "ellipse", "polyline", "polygon", "style", "desc", "defs", "use"]
+SVG_ATTRS = {
+    "d": ["M0 0 L10 10", "M 0,0 C 1 2 3 4 5 6 Z", "m1 1 a5 5 0 1 0 10 0", "M0 0 Q", "L1 1", "M1e400 0", "M0 0 H"],
+    "transform": ["scale(2)", "rotate(30 1 2)", "matrix(1 0 0 1 0 0)", "skewX(90)", "scale(1e308)", "bad(1)"],
+    "stroke": ["#000", "red", "#0000ff", "rgb(0,255,0)", "yellow", "#f0f", "none", "inherit", "#12"],
+    "style": ["stroke:#f00", "stroke:red;opacity:0.5", "display:none", "opacity:nan", ";;:", "stroke-opacity:2"],
+    "opacity": ["0.5", "-1", "1e400", "x", "50%"],
+    "points": ["0,0 10,10 20 0", "1 2 3", "a b", ""],
+    "x1": ["0", "1e400", "5px", "x"],
+    "width": ["10", "0", "-5", "1e9", "nan"],
+    "height": ["10", "0", "1e-9"],
+    "r": ["5", "0", "-1"],
+    "class": ["a", "b c"],
+    "id": ["a", "b"],
+}
+CSS_TEXTS = ["a{", "line{stroke:#00f}", "@import url(x.css); path{stroke:red}", "/* open", "}}{{", ".a{stroke:#000}",
+             "@media print{line{stroke:red}}", "#b,g>line{stroke:blue}"]
+
+
+@st.composite
+def svg_documents(draw) -> str:
+    """SVG text: random trees (deep nesting included) of shapes and containers with attributes drawn from good and
+    bad values, random stylesheets, and now and then a DOCTYPE with entities or a cut document."""
+    depth_limit = draw(st.sampled_from([3, 3, 3, 80]))
+
+    def element(depth: int) -> str:
+        tag = draw(st.sampled_from(SVG_TAGS))
+        keys = draw(st.lists(st.sampled_from(sorted(SVG_ATTRS)), max_size=4, unique=True))
+        attrs = "".join(f' {k}="{draw(st.sampled_from(SVG_ATTRS[k]))}"' for k in keys)
+        if tag == "style":
+            return f"<style>{''.join(draw(st.lists(st.sampled_from(CSS_TEXTS), max_size=4)))}</style>"
+        if tag in ("g", "defs") and depth < depth_limit:
+            n = 1 if depth_limit > 3 else draw(st.integers(0, 3))
+            return f"<{tag}{attrs}>" + "".join(element(depth + 1) for _ in range(n)) + f"</{tag}>"
+        return f"<{tag}{attrs}/>"
+
+    body = '<rect x="0" y="0" width="100" height="100" stroke="#000" fill="none"/>' if draw(st.booleans()) else ""
+    body += "".join(element(0) for _ in range(draw(st.integers(1, 5))))
+    if draw(st.integers(0, 9)) == 0:  # deep nesting, beyond Python's recursion limit
+        deep = draw(st.sampled_from([3000, 1200, 70]))
+        body = "<g>" * deep + body + "</g>" * deep
+    head = ""
+    if draw(st.integers(0, 9)) == 0:
+        head = '<!DOCTYPE svg [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>'
+        body += "<title>&b;&b;</title>"
+    size = draw(st.sampled_from(['width="100mm" height="100mm" viewBox="0 0 100 100"', "", 'viewBox="0 0 0 1"']))
+    text = f'{head}<svg xmlns="http://www.w3.org/2000/svg" {size}>{body}</svg>'
+    if draw(st.integers(0, 9)) == 0:
+        text = text[: draw(st.integers(min_value=0, max_value=len(text)))]
+    return text
+
+
+def read_svg_text(text: str) -> str:
+    """Read SVG text and discretise its curves as the command line does; returns "read" or "refused"."""
+    try:
+        drawing = parse_svg_text(text, "fuzz.svg")
+        discretize(drawing.curves)
+    except PatternError:
+        return "refused"
+    return "read"
+
+
+READER_SETTINGS = settings(
+    max_examples=150,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much],
+)
+
+
+@READER_SETTINGS
+@given(text=fold_documents())
+def test_fuzz_fold_reader(text: str) -> None:
+    """CI profile: 150 derandomised FOLD documents, each read or refused with a PatternError."""
+    t0 = time.perf_counter()
+    read_fold_text(text)
+    assert time.perf_counter() - t0 < 10.0
+
+
+@READER_SETTINGS
+@given(text=svg_documents())
+def test_fuzz_svg_reader(text: str) -> None:
+    """CI profile: 150 derandomised SVG documents, each read (and discretised) or refused with a PatternError."""
+    t0 = time.perf_counter()
+    read_svg_text(text)
+    assert time.perf_counter() - t0 < 10.0

@@ -2,12 +2,17 @@
 
 Usage (from the repo root)::
 
-    .venv/bin/python tools/fuzz_long.py --examples 2000 [--seed 1] [--json out/fuzz.json]
+    .venv/bin/python tools/fuzz_long.py --examples 2000 [--seed 1] [--readers 3000] [--json out/fuzz.json]
 
 Draws ``--examples`` random crease patterns with the same hypothesis strategy as the CI test, folds each one and
 counts what happened: folded (and how many were flagged "does not fold as assigned"), rejected with which catalogued
 error, or a violation (uncatalogued exception, non-finite result, strain or time over the bound). Violations do not
 stop the run: each is printed with the pattern that caused it. Exit status 1 if there was any violation.
+
+``--readers N`` also fuzzes the two file readers with ``N`` documents each (the strategies of ``tests/test_fuzz.py``:
+FOLD JSON with wrong types, nesting, huge numbers; SVG trees with bad attributes, stylesheets, deep nesting,
+entities): each must be read or refused with a PatternError; any other exception is a violation. ``make fuzz``
+runs both.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--examples", type=int, default=2000, help="number of patterns to try (default 2000)")
     parser.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
     parser.add_argument("--json", type=Path, default=None, help="also write the counts to this JSON file")
+    parser.add_argument("--readers", type=int, default=0, help="also fuzz the FOLD and SVG readers (N documents each)")
     args = parser.parse_args(argv)
 
     from hypothesis import HealthCheck, given, seed, settings
@@ -41,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
 
     @seed(args.seed)
     @settings(
-        max_examples=args.examples,
+        max_examples=max(args.examples, 1),
         deadline=None,
         database=None,
         suppress_health_check=list(HealthCheck),
@@ -66,7 +72,10 @@ def main(argv: list[str] | None = None) -> int:
         if done % 100 == 0:
             print(f"  {done} patterns, {time.perf_counter() - t_start:.0f} s", file=sys.stderr, flush=True)
 
-    run()
+    if args.examples > 0:
+        run()
+    if args.readers > 0:
+        violations += fuzz_readers(args.readers, args.seed, counts)
     total = sum(counts.values())
     summary = {
         "patterns": total,
@@ -88,6 +97,39 @@ def main(argv: list[str] | None = None) -> int:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(summary, indent=2) + "\n")
     return 1 if violations else 0
+
+
+def fuzz_readers(examples: int, seed_value: int, counts: Counter[str]) -> list[str]:
+    """Fuzz the FOLD and SVG readers with ``examples`` documents each; counts "fold reader: read/refused" etc.
+    and returns the violations (any exception other than PatternError, or a document over 10 s)."""
+    from hypothesis import HealthCheck, given, seed, settings
+
+    from curved_fold.tests.test_fuzz import fold_documents, read_fold_text, read_svg_text, svg_documents
+
+    violations: list[str] = []
+    def runner(name: str, strategy, reader):
+        @seed(seed_value)
+        @settings(max_examples=examples, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+        @given(text=strategy)
+        def run(text: str) -> None:
+            t0 = time.perf_counter()
+            try:
+                outcome = reader(text)
+            except Exception as exc:  # a violation: record it with the document, keep going
+                counts[f"VIOLATION ({name}): {type(exc).__name__}"] += 1
+                violations.append(f"{name}: {type(exc).__name__}: {exc}\n  document: {text[:300]!r}")
+                return
+            dt = time.perf_counter() - t0
+            if dt > 10.0:
+                counts[f"VIOLATION ({name}): over 10 s"] += 1
+                violations.append(f"{name}: {dt:.1f} s\n  document: {text[:300]!r}")
+            counts[f"{name}: {outcome}"] += 1
+
+        return run
+
+    runner("fold reader", fold_documents(), read_fold_text)()
+    runner("svg reader", svg_documents(), read_svg_text)()
+    return violations
 
 
 if __name__ == "__main__":

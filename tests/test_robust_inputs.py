@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import re
 import time
 from pathlib import Path
 
@@ -400,3 +402,240 @@ def test_dangling_crease_does_not_fold_as_assigned() -> None:
     report = assert_folds_finite(p, angle=90)
     assert report["does_not_fold_as_assigned"] is True
     assert report["strain_max_pct"] < 5
+
+
+# ------------------------------------------------------------------------------------------------ hostile inputs
+#
+# Issue 16: files from an attack session (and careless use) end within a few seconds with exit code 2 and one line
+# on stderr naming the limit or the problem; before the fix each of these hung, ran out of memory or printed a
+# traceback.
+
+HOSTILE_TIME_S = 10.0
+"""Wall-time bound of one hostile input through the command line (a few seconds; the machine is shared)."""
+
+HEAD = '<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" viewBox="0 0 100 100">'
+BILLION_LAUGHS = (
+    '<!DOCTYPE svg [<!ENTITY a "aaaaaaaaaa">'
+    + "".join(f'<!ENTITY {b} "{("&" + a + ";") * 10}">' for a, b in zip("abcdefgh", "bcdefghi", strict=True))
+    + "]>"
+)
+
+
+def run_cli(argv: list[str], capsys) -> tuple[int, str, str, float]:
+    """Run the command line in-process: (exit code, stdout, stderr, seconds)."""
+    from curved_fold.cli import main
+
+    t0 = time.perf_counter()
+    code = main(argv)
+    seconds = time.perf_counter() - t0
+    out, err = capsys.readouterr()
+    return code, out, err, seconds
+
+
+def hostile_files(tmp: Path) -> dict[str, tuple[Path, str]]:
+    """name → (file, regular expression its one-line error must match)."""
+    files: dict[str, tuple[str | bytes, str, str]] = {
+        "desc of 10^6 lines": (HEAD + "<desc>" + "x\n" * 1_000_000 + "</desc></svg>", "svg", "no usable crease"),
+        "billion laughs in <title>": (
+            BILLION_LAUGHS + HEAD + "<title>&i;</title></svg>",
+            "svg",
+            "malformed XML .*amplification",
+        ),
+        "100 KB <style> of 'a{'": (HEAD + "<style>" + "a{" * 50_000 + "</style></svg>", "svg", "no usable crease"),
+        "1,000 nested <g>": (HEAD + "<g>" * 1000 + BORDER + "</g>" * 1000 + "</svg>", "svg", "nesting depth 65 is"),
+        "10 MB path": (
+            HEAD + BORDER + '<path stroke="#f00" d="M 1 1' + " L 2 2 3 3" * 1_000_000 + '"/></svg>',
+            "svg",
+            "more than .* path segments .*CURVED_FOLD_MAX_PATH_SEGMENTS",
+        ),
+        "100,000 paths": (
+            HEAD + BORDER + '<path stroke="#f00" d="M 1 1 C 30 40 60 20 2 99"/>' * 100_000 + "</svg>",
+            "svg",
+            "number of SVG elements 50,001 is above the limit of 50,000 .*CURVED_FOLD_MAX_ELEMENTS",
+        ),
+        "FOLD of 10^6 border vertices": (
+            json.dumps(
+                {
+                    "vertices_coords": [[i, 0] for i in range(1_000_000)],
+                    "edges_vertices": [[0, 1]],
+                    "edges_assignment": ["B"],
+                },
+                separators=(",", ":"),
+            ),
+            "fold",
+            r"vertices_coords: array length 1,000,000 is above the limit of 200,000 .*CURVED_FOLD_MAX_FOLD_ENTRIES",
+        ),
+        "FOLD nested 3,000 deep": ('{"x": ' + "[" * 3000 + "]" * 3000 + "}", "fold", "nesting depth above the limit"),
+        "gzip data": (
+            b"\x1f\x8b\x08\x00" + b"\x00" * 40,
+            "svg",
+            "gzip-compressed data, not a plain SVG file; decompress it first",
+        ),
+    }
+    out = {}
+    for k, (name, (data, suffix, message)) in enumerate(files.items()):
+        path = tmp / f"hostile{k}.{suffix}"
+        if isinstance(data, str):
+            path.write_text(data, encoding="utf-8")
+        else:
+            path.write_bytes(data)
+        out[name] = (path, message)
+    return out
+
+
+HOSTILE_NAMES = [
+    "desc of 10^6 lines",
+    "billion laughs in <title>",
+    "100 KB <style> of 'a{'",
+    "1,000 nested <g>",
+    "10 MB path",
+    "100,000 paths",
+    "FOLD of 10^6 border vertices",
+    "FOLD nested 3,000 deep",
+    "gzip data",
+]
+
+
+@pytest.fixture(scope="module")
+def hostile(tmp_path_factory) -> dict[str, tuple[Path, str]]:
+    return hostile_files(tmp_path_factory.mktemp("hostile"))
+
+
+@pytest.mark.parametrize("name", HOSTILE_NAMES)
+def test_hostile_input_ends_fast_with_exit_2_and_one_line(hostile, name, tmp_path, capsys) -> None:
+    path, message = hostile[name]
+    code, out, err, seconds = run_cli(["discretize", str(path), "--out", str(tmp_path / "o.fold")], capsys)
+    assert code == 2, (out, err)
+    assert re.search(message, err), err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert seconds < HOSTILE_TIME_S, f"{name}: {seconds:.1f} s"
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_css_of_unclosed_blocks_is_linear() -> None:
+    """The stylesheet scanner is one pass: 400 KB of 'a{' (4x the issue's file) reads in well under a second."""
+    t0 = time.perf_counter()
+    drawing = parse_svg_text(svg("<style>" + "a{" * 200_000 + "/*" * 1000 + "</style>" + BORDER), "t.svg")
+    assert time.perf_counter() - t0 < 2.0
+    assert len(drawing.curves) == 1
+
+
+@pytest.mark.parametrize(
+    "option", [["--interval", "1e-9"], ["--tolerance", "1e-12"], ["--interval", "1e-9", "--tolerance", "1e-12"]]
+)
+def test_tiny_discretisation_parameters_are_capped_fast(option, tmp_path, capsys) -> None:
+    src = tmp_path / "c.svg"
+    src.write_text(
+        svg(
+            BORDER + '<path d="M 50 0 C 20 30 80 60 50 100" stroke="#f00"/><circle cx="50" cy="50" r="20" '
+            'stroke="#00f" fill="none"/>'
+        )
+    )
+    code, out, err, seconds = run_cli(["discretize", str(src), "--out", str(tmp_path / "o.fold"), *option], capsys)
+    assert code == 0, err
+    assert "discretisation capped" in out
+    assert seconds < HOSTILE_TIME_S
+    segments = int(re.search(r"segments: (\d+)", out).group(1))
+    assert segments <= MAX_SEGMENTS
+
+
+FOLD_SQUARE = {
+    "vertices_coords": [[0, 0], [1, 0], [1, 1], [0, 1]],
+    "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]],
+    "edges_assignment": ["B", "B", "B", "B", "V"],
+}
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"vertices_coords": [["1", 0], [1, 0], [1, 1], [0, 1]]}, r"vertices_coords\[0\] = \['1', 0\]: '1' is not a"),
+        ({"vertices_coords": [[True, 0], [1, 0], [1, 1], [0, 1]]}, r"vertices_coords\[0\] = \[True, 0\]: True is not"),
+        (
+            {"vertices_coords": [[1e308, 0], [1, 0], [1, 1], [0, 1]]},
+            r"vertices_coords\[0\] = \[1e\+308, 0\]: coordinate 1e\+308 is beyond ±1e\+08 mm",
+        ),
+        ({"vertices_coords": [[0, 0, 0, 0]] * 4}, r"vertices_coords\[0\] = \[0, 0, 0, 0\]: a vertex needs 2 or 3"),
+        ({"vertices_coords": [[], [], [], []]}, r"vertices_coords\[0\] = \[\]: a vertex needs 2 or 3 coordinates"),
+        (
+            {"edges_vertices": [[0, 1.5], [1, 2], [2, 3], [3, 0], [0, 2]]},
+            r"edges_vertices\[0\] = \[0, 1\.5\]: 1\.5 is not an integer index",
+        ),
+        (
+            {"edges_vertices": [[0, True], [1, 2], [2, 3], [3, 0], [0, 2]]},
+            r"edges_vertices\[0\] = \[0, True\]: True is not an integer index",
+        ),
+        ({"edges_foldAngle": [0, 0, 0, 0, 270]}, r"edges_foldAngle\[4\] = 270° is outside \[-180°, 180°\]"),
+        ({"edges_foldAngle": [0, 0, 0, 0, -1e9]}, r"edges_foldAngle\[4\] = -1e\+09° is outside"),
+        ({"curved_fold:edge_polyline": None}, r"curved_fold:edge_polyline = None must be an array"),
+        ({"curved_fold:edge_polyline": ["a"] * 5}, r"curved_fold:edge_polyline\[0\] = 'a' is not an index below"),
+        ({"curved_fold:edge_polyline": [0, 0, 0, 0, 10**9]}, r"curved_fold:edge_polyline\[4\] = 1000000000 is not an"),
+        ({"curved_fold:sources": 5}, r"curved_fold:sources = 5 must be an array"),
+        ({"curved_fold:edge_from_curve": ["yes"] * 5}, r"curved_fold:edge_from_curve\[0\] = 'yes' is not true or"),
+        ({"file_frames": [{"vertices_coords": "x"}]}, r"file_frames\[0\]\.vertices_coords = 'x' must be an array"),
+        ({"file_frames": [{"frame_parent": 0.5, "frame_inherit": True}]}, r"file_frames\[0\]\.frame_parent = 0\.5"),
+        ({"frame_unit": 3}, r"frame_unit = 3 is not a string"),
+    ],
+)
+def test_fold_field_types_are_checked_with_locations(tmp_path: Path, change: dict, message: str) -> None:
+    path = tmp_path / "sq.fold"
+    path.write_text(json.dumps({**FOLD_SQUARE, **change}))
+    with pytest.raises(PatternError, match=r"^sq\.fold: " + message):
+        read_pattern(path)
+
+
+def test_fold_huge_integer_coordinate(tmp_path: Path) -> None:
+    """A 400-digit integer is read as an infinite float and refused, instead of overflowing later."""
+    path = tmp_path / "sq.fold"
+    path.write_text(json.dumps(FOLD_SQUARE).replace("[1, 0]", "[1" + "0" * 400 + ", 0]", 1))
+    with pytest.raises(PatternError, match=r"vertices_coords\[1\] = \[inf, 0\] has a non-finite coordinate"):
+        read_pattern(path)
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        (["--percent", "-10"], r"--percent -10: must be a number from 0 to 100"),
+        (["--percent", "150"], r"--percent 150: must be a number from 0 to 100"),
+        (["--percent", "nan"], r"--percent nan: must be a number from 0 to 100"),
+        (["--percent", "inf"], r"--percent inf: must be a number from 0 to 100"),
+        (["--angle", "1e9"], r"--angle 1e\+09: must be a number of degrees from -180 to 180"),
+        (["--angle", "-181"], r"--angle -181: must be"),
+        (["--angle", "nan"], r"--angle nan: must be"),
+    ],
+)
+def test_percent_and_angle_ranges(option, message, tmp_path, capsys) -> None:
+    src = REPO / "tests" / "fixtures" / "origami-simulator" / "simpleVertex.svg"
+    code, out, err, _ = run_cli(["fold", str(src), "--out", str(tmp_path / "o.fold"), *option], capsys)
+    assert code == 2 and re.search(message, err), err
+    assert len(err) < 200 and list(tmp_path.iterdir()) == []
+
+
+def test_fifo_and_folder_inputs_are_refused(tmp_path, capsys) -> None:
+    fifo = tmp_path / "pipe.svg"
+    os.mkfifo(fifo)
+    (tmp_path / "dir.fold").mkdir()
+    for name, kind in (("pipe.svg", "a FIFO (named pipe)"), ("dir.fold", "a folder")):
+        code, _, err, seconds = run_cli(["discretize", str(tmp_path / name), "--out", str(tmp_path / "o.fold")], capsys)
+        assert code == 2 and f"is {kind}, not a regular file" in err and seconds < HOSTILE_TIME_S
+
+
+def test_memory_error_is_one_line(tmp_path, capsys, monkeypatch) -> None:
+    """Exhausted memory (``ulimit -v`` on a big pattern) ends in one line and exit 2; simulated here because a
+    real address-space limit also breaks the thread start-up of Blender's libraries."""
+    import curved_fold.core.io.reader as reader
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(reader, "read_pattern", exhausted)
+    src = REPO / "tests" / "fixtures" / "origami-simulator" / "simpleVertex.svg"
+    code, _, err, _ = run_cli(["fold", str(src), "--out", str(tmp_path / "o.fold")], capsys)
+    assert code == 2 and err.startswith("curved_fold: error: out of memory") and err.count("\n") == 1
+
+
+def test_css_import_does_not_drop_the_next_rule() -> None:
+    body = "<style>@import url(x.css); line{stroke:#00f}</style>" + BORDER + '<line x1="50" y1="0" x2="50" y2="100"/>'
+    drawing = parse_svg_text(svg(body), "t.svg")
+    assert sorted(c.assignment for c in drawing.curves) == ["B", "V"]
+    assert any("CSS at-rules not followed: @import" in w for w in drawing.warnings)

@@ -4,12 +4,19 @@
   attributes, shape keys: ``snapshot`` from tests/test_operators.py), for each catalogued kind of bad input;
 * the user's crease curves are never modified by a fold, a re-fold, a bake or an export;
 * a bake that fails keeps the previous bake (shape keys and keyframes) intact;
-* files are written to a temporary name and moved into place: a failed write leaves the old file and no debris.
+* files are written to a temporary name and moved into place: a failed write leaves the old file and no debris;
+* the command line's outputs (issue 16): every format written whole or not at all (a write failing midway keeps
+  the old file byte for byte), symlinks written through, devices/FIFOs/folders and input/output collisions
+  refused, temporary files removed on SIGINT/SIGTERM, the report JSON finite, a progress line only on a terminal.
 """
 
 from __future__ import annotations
 
 import os
+import resource
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -275,3 +282,207 @@ def test_export_overwrite_is_atomic(clean_scene, tmp_path):
     assert bpy.ops.curved_fold.export_folded(filepath=str(out), file_format="FOLD") == {"FINISHED"}
     assert out.read_text().lstrip().startswith("{") and out.stat().st_ino != inode  # a new file moved into place
     assert sorted(p.name for p in Path(tmp_path).iterdir()) == ["out.fold"]
+
+
+# ------------------------------------------------------------------------------------------ outputs (issue 16)
+
+SIMPLE = Path(__file__).resolve().parent / "fixtures" / "origami-simulator" / "simpleVertex.svg"
+OLD_BYTES = b"old file \x00\x01 kept byte for byte\n"
+
+
+def _cli_with_file_size_limit(args: list[str], limit: int) -> subprocess.CompletedProcess:
+    """Run ``python -m curved_fold`` with writes above ``limit`` bytes failing (EFBIG, as a full disk would), the
+    way ``ulimit -f`` does it; SIGXFSZ is ignored so the write fails instead of killing the process."""
+
+    def limit_writes() -> None:
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return subprocess.run(
+        [sys.executable, "-m", "curved_fold", *args],
+        preexec_fn=limit_writes,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+@pytest.mark.parametrize("suffix", [".fold", ".obj", ".glb", ".blend"])
+def test_output_failing_midway_keeps_the_old_file(tmp_path, suffix):
+    """Every output format: a write cut off after 1,500 bytes (the file-size limit stands in for a full disk) ends
+    with exit 2 and one line naming the user's path, the old file byte for byte, and no temporary file. Before,
+    a cut ``.obj`` replaced the old one and Blender said "File exported successfully" (exit 0)."""
+    out = tmp_path / f"folded{suffix}"
+    out.write_bytes(OLD_BYTES)
+    r = _cli_with_file_size_limit(["fold", str(SIMPLE), "--out", str(out), "--quiet"], 1500)
+    assert r.returncode == 2, r.stderr
+    last = r.stderr.strip().splitlines()[-1]
+    assert last.startswith("curved_fold: error: ") and str(out) in last and ".tmp" not in last, r.stderr
+    assert "Traceback" not in r.stderr
+    assert out.read_bytes() == OLD_BYTES
+    assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]
+
+
+@pytest.mark.parametrize("suffix", [".fold", ".obj", ".glb", ".blend"])
+def test_output_written_whole_through_the_command_line(tmp_path, suffix):
+    """The same run without a limit replaces the old file with a whole one (the completeness check passes)."""
+    from curved_fold.cli import main
+
+    out = tmp_path / f"folded{suffix}"
+    out.write_bytes(OLD_BYTES)
+    assert main(["fold", str(SIMPLE), "--out", str(out), "--quiet"]) == 0
+    data = out.read_bytes()
+    assert data != OLD_BYTES and len(data) > 1000
+    assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]
+
+
+def test_failing_report_leaves_the_mesh_unwritten(tmp_path, monkeypatch, capsys):
+    """Mesh and report are written together: a report that fails leaves the old mesh (before, exit 2 came after
+    the mesh had been replaced)."""
+    import curved_fold.cli.fold as cli_fold
+    from curved_fold.cli import main
+
+    out, report = tmp_path / "folded.fold", tmp_path / "report.json"
+    out.write_bytes(OLD_BYTES)
+
+    def disk_full(value):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(cli_fold, "finite_json", disk_full)
+    assert main(["fold", str(SIMPLE), "--out", str(out), "--report", str(report)]) == 2
+    assert "No space left on device" in capsys.readouterr().err
+    assert out.read_bytes() == OLD_BYTES and not report.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]
+
+
+def test_out_through_a_symlink_writes_its_target(tmp_path):
+    from curved_fold.cli import main
+
+    target = tmp_path / "real.fold"
+    target.write_bytes(OLD_BYTES)
+    link = tmp_path / "link.fold"
+    link.symlink_to(target.name)
+    assert main(["fold", str(SIMPLE), "--out", str(link), "--quiet"]) == 0
+    assert link.is_symlink() and os.readlink(link) == target.name
+    assert target.read_bytes().lstrip().startswith(b"{")
+    assert oct(target.stat().st_mode & 0o777) != oct(0o600)  # not the temporary file's private mode
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.fold", "real.fold"]
+
+
+@pytest.mark.parametrize("kind", ["device", "fifo", "folder"])
+def test_non_regular_out_is_refused(tmp_path, capsys, kind):
+    from curved_fold.cli import main
+
+    out = tmp_path / "o.fold"
+    if kind == "device":
+        out.symlink_to("/dev/null")
+    elif kind == "fifo":
+        os.mkfifo(out)
+    else:
+        out.mkdir()
+    before = os.stat(out).st_mode
+    assert main(["fold", str(SIMPLE), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"--out {out}: is a" in err and "not a regular file; refusing to write there" in err
+    assert os.stat(out).st_mode == before and oct(os.stat("/dev/null").st_mode)[:4] == "0o20"  # still a device
+
+
+@pytest.mark.parametrize(
+    ("which", "message"),
+    [
+        ("out=input", r"--out .*: is the input file"),
+        ("report=out", r"--out .* and --report .* name the same file"),
+        ("report=input", r"--report .*: is the input file"),
+    ],
+)
+def test_output_collisions_are_refused(tmp_path, capsys, which, message):
+    import re
+
+    from curved_fold.cli import main
+
+    src = tmp_path / "pattern.fold"
+    assert main(["discretize", str(SIMPLE), "--out", str(src), "--quiet"]) == 0
+    original = src.read_bytes()
+    out, report = tmp_path / "folded.fold", tmp_path / "r.json"
+    if which == "out=input":
+        out = tmp_path / "." / "pattern.fold"
+    elif which == "report=out":
+        report = out
+    else:
+        report = tmp_path / "link.json"
+        report.symlink_to(src)
+    assert main(["fold", str(src), "--out", str(out), "--report", str(report)]) == 2
+    assert re.search(message, capsys.readouterr().err)
+    assert src.read_bytes() == original
+
+
+SIGNAL_WRITER = r"""
+import os, sys, time
+from curved_fold.core.io.atomic import atomic_output, install_signal_cleanup
+install_signal_cleanup()
+try:
+    with atomic_output(sys.argv[1]) as tmp:
+        with open(tmp, "wb") as fh:
+            fh.write(b"half a file")
+            fh.flush()
+        print(tmp, flush=True)
+        time.sleep(60)
+except KeyboardInterrupt:
+    sys.exit(130)
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_signal_during_a_write_removes_the_temporary_file(tmp_path, signum):
+    out = tmp_path / "out.fold"
+    out.write_bytes(OLD_BYTES)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.Popen([sys.executable, "-c", SIGNAL_WRITER, str(out)], stdout=subprocess.PIPE, text=True, env=env)
+    tmp = proc.stdout.readline().strip()
+    assert Path(tmp).exists() and Path(tmp).parent == tmp_path
+    proc.send_signal(signum)
+    assert proc.wait(timeout=30) == (143 if signum == signal.SIGTERM else 130)
+    assert not Path(tmp).exists()
+    assert out.read_bytes() == OLD_BYTES
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.fold"]
+
+
+def test_report_json_has_no_infinity(tmp_path):
+    import json
+
+    from curved_fold.cli import main
+    from curved_fold.cli.outputs import finite_json
+
+    assert finite_json({"a": float("inf"), "b": [1.0, float("nan")], "c": np.float64(-np.inf), "d": 2}) == {
+        "a": None,
+        "b": [1.0, None],
+        "c": None,
+        "d": 2,
+    }
+    report = tmp_path / "r.json"
+    assert main(["fold", str(SIMPLE), "--out", str(tmp_path / "o.fold"), "--report", str(report), "-q"]) == 0
+    text = report.read_text()
+    assert "Infinity" not in text and "NaN" not in text
+    json.loads(text, parse_constant=lambda c: pytest.fail(f"{c} in the report"))
+
+
+def test_progress_line_only_on_a_terminal_and_not_quiet():
+    import io
+    import time
+
+    from curved_fold.cli.progress import Progress
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    tty, pipe = Terminal(), io.StringIO()
+    for progress in (Progress(stream=tty), Progress(stream=pipe), Progress(stream=Terminal(), quiet=True)):
+        with progress.stage("meshing"):
+            time.sleep(1.3)
+    assert "\rcurved_fold: meshing... 1 s" in tty.getvalue() and tty.getvalue().endswith("\r\033[K")
+    assert pipe.getvalue() == ""
+    quick = Terminal()
+    with Progress(stream=quick).stage("solving"):
+        time.sleep(0.2)
+    assert quick.getvalue() == ""  # under a second: nothing drawn

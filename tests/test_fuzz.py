@@ -310,8 +310,16 @@ SVG_ATTRS = {
     "class": ["a", "b c"],
     "id": ["a", "b"],
 }
-CSS_TEXTS = ["a{", "line{stroke:#00f}", "@import url(x.css); path{stroke:red}", "/* open", "}}{{", ".a{stroke:#000}",
-             "@media print{line{stroke:red}}", "#b,g>line{stroke:blue}"]
+CSS_TEXTS = [
+    "a{",
+    "line{stroke:#00f}",
+    "@import url(x.css); path{stroke:red}",
+    "/* open",
+    "}}{{",
+    ".a{stroke:#000}",
+    "@media print{line{stroke:red}}",
+    "#b,g>line{stroke:blue}",
+]
 
 
 @st.composite

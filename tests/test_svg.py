@@ -474,3 +474,73 @@ def test_bad_attribute_values_are_reported() -> None:
 def test_segments_are_curve_segments() -> None:
     (c,) = curves_of('<path stroke="red" d="M0 0 C 0 10 10 10 10 0"/>')
     assert isinstance(c.segments[0], CurveSegment) and c.is_curved
+
+
+# ------------------------------------------------------------------------------------------ bounded parsing (issue 16)
+
+HEAD16 = '<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" viewBox="0 0 100 100">'
+BORDER16 = '<rect x="0" y="0" width="100" height="100" stroke="#000"/>'
+
+
+def test_css_blocks_scanner_handles_at_rules_nesting_and_unclosed_blocks() -> None:
+    from curved_fold.core.io.svg import _css_blocks, _strip_comments
+
+    assert _css_blocks("a{x:1} @media print{b{y:2}} c{z:3") == [
+        ("a", "x:1"),
+        (" @media print", "b{y:2}"),
+        (" c", "z:3"),
+    ]
+    assert _css_blocks("}}a{b}") == [("a", "b")]
+    assert _strip_comments("a/* x */b/* open") == "ab"
+    body = (
+        "<style>@import url(a.css); @charset 'x'; line{stroke:#f00} @media print{line{stroke:#00f}} "
+        "/* line{stroke:#0f0} */ .c{stroke:#000</style>"
+        + BORDER16
+        + '<line x1="50" y1="0" x2="50" y2="100"/><line class="c" x1="20" y1="0" x2="20" y2="100"/>'
+    )
+    drawing = parse_svg_text(HEAD16 + body + "</svg>", "t.svg")
+    assert sorted(c.assignment for c in drawing.curves) == ["B", "B", "M"]  # @media ignored, unclosed .c block kept
+    assert any("@charset, @import, @media" in w for w in drawing.warnings), drawing.warnings
+
+
+def test_deep_nesting_is_walked_without_recursion(monkeypatch) -> None:
+    """5,000 nested groups (5x Python's recursion limit) read fine once the nesting limit is raised: the walk is
+    iterative; with the default limit they are refused with a message naming the variable."""
+    text = HEAD16 + "<g>" * 5000 + BORDER16 + '<line x1="50" y1="0" x2="50" y2="100" stroke="red"/>'
+    text += "</g>" * 5000 + "</svg>"
+    with pytest.raises(PatternError, match=r"nesting depth 65 is above the limit of 64 .*CURVED_FOLD_MAX_NESTING"):
+        parse_svg_text(text, "deep.svg")
+    monkeypatch.setenv("CURVED_FOLD_MAX_NESTING", "6000")
+    drawing = parse_svg_text(text, "deep.svg")
+    assert sorted(c.assignment for c in drawing.curves) == ["B", "M"]
+
+
+def test_element_text_is_linear_and_kept_only_for_style() -> None:
+    import time
+
+    t0 = time.perf_counter()
+    drawing = parse_svg_text(HEAD16 + "<desc>" + "x\n" * 1_000_000 + "</desc>" + BORDER16 + "</svg>", "t.svg")
+    assert time.perf_counter() - t0 < 5.0 and len(drawing.curves) == 1
+
+
+def test_limits_can_be_raised_by_environment(monkeypatch) -> None:
+    many = HEAD16 + BORDER16 + '<line x1="50" y1="0" x2="50" y2="100" stroke="red"/>' * 60 + "</svg>"
+    monkeypatch.setenv("CURVED_FOLD_MAX_ELEMENTS", "50")
+    with pytest.raises(PatternError, match=r"number of SVG elements 51 is above the limit of 50"):
+        parse_svg_text(many, "t.svg")
+    monkeypatch.setenv("CURVED_FOLD_MAX_ELEMENTS", "100")
+    assert len(parse_svg_text(many, "t.svg").curves) == 61
+    path = HEAD16 + BORDER16 + '<path stroke="red" d="M0 0' + " L1 1" * 30 + '"/></svg>'
+    monkeypatch.setenv("CURVED_FOLD_MAX_PATH_SEGMENTS", "20")
+    with pytest.raises(PatternError, match=r"more than 16 path segments .*CURVED_FOLD_MAX_PATH_SEGMENTS"):
+        parse_svg_text(path, "t.svg")
+
+
+def test_attribute_with_long_whitespace_runs_is_fast() -> None:
+    import time
+
+    t0 = time.perf_counter()
+    body = BORDER16 + f'<line x1="50{" " * 100_000}x" y1="0" x2="50" y2="100" stroke="red"/>'
+    with pytest.raises(PatternError, match=r"attribute x1='50 +\.\.\.' is not a number"):
+        parse_svg_text(HEAD16 + body + "</svg>", "t.svg")
+    assert time.perf_counter() - t0 < 2.0

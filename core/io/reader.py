@@ -80,6 +80,8 @@ def read_input_bytes(path: str | os.PathLike[str], kind: str) -> bytes:
     """The bytes of an input file of type ``kind`` (``"SVG"``, ``"FOLD"``), checked first: a regular file, not
     above :data:`.limits.FILE_MB`, not compressed (``.svgz`` or a gzip/zip archive gets a message saying so)."""
     p = Path(path)
+    if not p.exists():
+        raise PatternError(f"{p}: cannot read {kind} file: no such file")
     st = _check_regular(p)
     limits.check_file_size(st.st_size, str(p))
     try:

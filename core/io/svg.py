@@ -738,7 +738,8 @@ def _attr_float(elem: _Element, name: str, where: str, default: float | None = 0
         return default
     m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)(?:\s*px)?", value.strip())
     if not m:
-        raise PatternError(f"{where}: attribute {name}={value!r} is not a number in user units")
+        shown = value if len(value) <= 40 else value[:37] + "..."
+        raise PatternError(f"{where}: attribute {name}={shown!r} is not a number in user units")
     return float(m.group(1))
 
 

@@ -566,23 +566,32 @@ def discretize(
         )
         tolerance = tolerance_floor
 
-    # -- explosion guard: estimate the count first, enlarge the parameters if needed
-    estimate = 0.0
-    for c in curves:
-        for seg in c.segments:
-            if not seg.is_straight:
-                estimate += _estimate_pieces(seg, interval, tolerance)
-            elif c.assignment == "B":
-                estimate += max(1.0, _segment_length(seg) / interval)
-            else:
-                estimate += 1.0
+    # -- explosion guard: estimate the count first, enlarge the parameters until the estimate is under the limit
+    def estimated_count(interval: float, tolerance: float) -> float:
+        estimate = 0.0
+        for c in curves:
+            for seg in c.segments:
+                if not seg.is_straight:
+                    estimate += _estimate_pieces(seg, interval, tolerance)
+                elif c.assignment == "B":
+                    estimate += max(1.0, _segment_length(seg) / interval)
+                else:
+                    estimate += 1.0
+        return estimate
+
+    estimate = first_estimate = estimated_count(interval, tolerance)
     if estimate > MAX_SEGMENTS:
-        f = estimate / MAX_SEGMENTS
         old_i, old_t = interval, tolerance
-        interval, tolerance = interval * f, tolerance * f * f
+        target = 0.8 * MAX_SEGMENTS  # margin: the estimate runs up to ~12 % low (crossings, border pieces rounded up)
+        for _ in range(8):  # pieces scale as 1/interval and 1/sqrt(tolerance)
+            f = estimate / target
+            interval, tolerance = interval * f, tolerance * f * f
+            estimate = estimated_count(interval, tolerance)
+            if estimate <= target:
+                break
         warnings.append(
             f"discretisation capped: interval {old_i:g} mm and tolerance {old_t:g} mm would give about "
-            f"{int(estimate)} segments (limit {MAX_SEGMENTS}); used interval {interval:.4g} mm and tolerance "
+            f"{int(first_estimate)} segments (limit {MAX_SEGMENTS}); used interval {interval:.4g} mm and tolerance "
             f"{tolerance:.4g} mm"
         )
 

@@ -90,3 +90,26 @@ def test_fold_input_is_copied_through(tmp_path: Path) -> None:
     assert res.returncode == 0, res.stderr
     assert "parameters: none (a FOLD file is already straight segments)" in res.stdout
     assert second.read_bytes() == first.read_bytes()
+
+
+def test_quiet_prints_nothing_and_still_writes(tmp_path: Path) -> None:
+    out = tmp_path / "w.fold"
+    res = run(str(FIXTURES / "wavy_pleats.svg"), "--out", str(out), "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert res.stdout == "" and res.stderr == ""  # not a terminal: no progress line either
+    assert json.loads(out.read_text())["edges_vertices"]
+
+
+def test_out_equal_to_the_input_is_refused(tmp_path: Path) -> None:
+    src = tmp_path / "p.fold"
+    assert run(str(FIXTURES / "wavy_pleats.svg"), "--out", str(src), "-q").returncode == 0
+    before = src.read_bytes()
+    res = run(str(src), "--out", str(tmp_path / "." / "p.fold"))
+    assert res.returncode == 2
+    assert res.stderr.strip().endswith("is the input file " + str(src) + "; choose another output file")
+    assert src.read_bytes() == before
+
+
+def test_non_finite_parameters_are_refused() -> None:
+    res = run(str(FIXTURES / "wavy_pleats.svg"), "--out", "/tmp/never-written.fold", "--interval", "inf")
+    assert res.returncode == 2 and "--interval inf: must be a positive number of mm" in res.stderr

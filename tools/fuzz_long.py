@@ -107,6 +107,7 @@ def fuzz_readers(examples: int, seed_value: int, counts: Counter[str]) -> list[s
     from curved_fold.tests.test_fuzz import fold_documents, read_fold_text, read_svg_text, svg_documents
 
     violations: list[str] = []
+
     def runner(name: str, strategy, reader):
         @seed(seed_value)
         @settings(max_examples=examples, deadline=None, database=None, suppress_health_check=list(HealthCheck))

@@ -41,12 +41,12 @@ def main(argv: list[str] | None = None) -> int:
     that cannot be read or written (:class:`OSError`, naming the user's path), exhausted memory (a pattern too big
     for this machine) and too-deep recursion. SIGINT and SIGTERM remove any half-written temporary file first.
     """
-    from ..core.io.atomic import install_signal_cleanup
+    from ..core.io.atomic import install_signal_cleanup, restore_signal_handlers
 
     parser = build_parser()
     args = parser.parse_args(argv)
     _enable_blend_files()
-    install_signal_cleanup()
+    previous = install_signal_cleanup()
     try:
         return int(args.func(args) or 0)
     except PatternError as exc:
@@ -71,6 +71,8 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:  # only SIGTERM raises it here (argparse's exits happen above)
         print("curved_fold: terminated (unfinished temporary files removed)", file=sys.stderr)
         raise exc
+    finally:
+        restore_signal_handlers(previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

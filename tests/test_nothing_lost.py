@@ -486,3 +486,45 @@ def test_progress_line_only_on_a_terminal_and_not_quiet():
     with Progress(stream=quick).stage("solving"):
         time.sleep(0.2)
     assert quick.getvalue() == ""  # under a second: nothing drawn
+
+
+def test_sigterm_during_a_command_line_fold(tmp_path):
+    """SIGTERM while ``fold`` works (reading, meshing, solving or writing) ends with status 143, one line, the old
+    output byte for byte and no temporary file (Linux: the handler is detected through /proc)."""
+    import time
+
+    out = tmp_path / "folded.glb"
+    out.write_bytes(OLD_BYTES)
+    src = SIMPLE.parent / "Treble_Clef.svg"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "curved_fold", "fold", str(src), "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    # wait until the command line has installed its handler (SigCgt in /proc has the SIGTERM bit), then let it work
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        with open(f"/proc/{proc.pid}/status") as fh:
+            caught = int(next(x for x in fh if x.startswith("SigCgt:")).split()[1], 16)
+        if caught & (1 << (signal.SIGTERM - 1)):
+            break
+        time.sleep(0.05)
+    time.sleep(0.5)
+    proc.terminate()
+    _, err = proc.communicate(timeout=60)
+    if proc.returncode == 0:  # finished before the signal on a fast machine: nothing to check but the result
+        assert out.read_bytes() != OLD_BYTES
+    else:
+        assert proc.returncode == 143, err
+        assert err.strip().splitlines()[-1] == "curved_fold: terminated (unfinished temporary files removed)"
+        assert out.read_bytes() == OLD_BYTES
+    assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]
+
+
+def test_command_line_restores_the_signal_handlers(tmp_path):
+    from curved_fold.cli import main
+
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    assert main(["discretize", str(SIMPLE), "--out", str(tmp_path / "p.fold"), "-q"]) == 0
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before

@@ -28,6 +28,7 @@ import tempfile
 import threading
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 _live_temporaries: set[str] = set()
 """Temporary files being written right now (removed by the signal handlers of :func:`install_signal_cleanup`)."""
@@ -197,14 +198,16 @@ def remove_live_temporaries() -> None:
         _remove(name)
 
 
-def install_signal_cleanup() -> None:
+def install_signal_cleanup() -> dict[int, Any]:
     """Make SIGINT and SIGTERM remove live temporary files, then stop the run: SIGINT raises
     :class:`KeyboardInterrupt`, SIGTERM :class:`SystemExit` (status 143), so ``finally`` blocks also run.
 
-    Only from the main thread (Python's rule for signal handlers); elsewhere this does nothing.
+    Returns the handlers it replaced (give them to :func:`restore_signal_handlers` when the run is over, so a
+    command line called from a script or from Blender leaves the process as it found it). Only from the main
+    thread (Python's rule for signal handlers); elsewhere this does nothing and returns ``{}``.
     """
     if threading.current_thread() is not threading.main_thread():
-        return
+        return {}
 
     def on_signal(signum: int, frame: object) -> None:
         remove_live_temporaries()
@@ -212,6 +215,15 @@ def install_signal_cleanup() -> None:
             raise KeyboardInterrupt
         raise SystemExit(128 + signum)
 
-    signal.signal(signal.SIGINT, on_signal)
-    if hasattr(signal, "SIGTERM"):
-        signal.signal(signal.SIGTERM, on_signal)
+    previous: dict[int, Any] = {}
+    for signum in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
+        if signum is not None:
+            previous[signum] = signal.signal(signum, on_signal)
+    return previous
+
+
+def restore_signal_handlers(previous: dict[int, Any]) -> None:
+    """Put back the handlers :func:`install_signal_cleanup` replaced."""
+    for signum, handler in previous.items():
+        if handler is not None:
+            signal.signal(signum, handler)

@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     check_outputs(path, {"--out": out})
     t0 = time.perf_counter()
     is_fold = path.suffix.lower() == ".fold"
-    with Progress(quiet=args.quiet).stage(f"reading and discretising {path.name}"):
+    with Progress(quiet=args.quiet).stage(f"{path.name}"):
         if is_fold:
             pattern = read_pattern(path)
         else:

@@ -117,9 +117,9 @@ def run(args: argparse.Namespace) -> int:
     _check_numbers(args)
     check_outputs(args.input, {"--out": out, "--report": args.report})
     progress = Progress(quiet=args.quiet)
-    with progress.stage(f"reading {Path(args.input).name}"):
+    with progress.stage(Path(args.input).name):
         pattern = read_pattern(args.input, interval=args.interval, tolerance=args.tolerance)
-    with progress.stage(f"folding {pattern.n_edges:,} segments (meshing, then solving)"):
+    with progress.stage(f"folding {pattern.n_edges:,} segments"):
         fold = fold_pattern(
             pattern, angle=args.angle, percent=args.percent / 100.0, mesh_type=args.mesh, solver=args.solver
         )

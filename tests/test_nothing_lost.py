@@ -480,7 +480,7 @@ def test_progress_line_only_on_a_terminal_and_not_quiet():
     for progress in (Progress(stream=tty), Progress(stream=pipe), Progress(stream=Terminal(), quiet=True)):
         with progress.stage("meshing"):
             time.sleep(1.3)
-    assert "\rcurved_fold: meshing... 1 s" in tty.getvalue() and tty.getvalue().endswith("\r\033[K")
+    assert "\rcurved_fold: meshing... 1 s\033[K" in tty.getvalue() and tty.getvalue().endswith("\r\033[K")
     assert pipe.getvalue() == ""
     quick = Terminal()
     with Progress(stream=quick).stage("solving"):
@@ -528,3 +528,25 @@ def test_command_line_restores_the_signal_handlers(tmp_path):
     before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
     assert main(["discretize", str(SIMPLE), "--out", str(tmp_path / "p.fold"), "-q"]) == 0
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+
+
+def test_progress_line_names_the_engine_step():
+    """During a real fold of more than a second the line says which step runs (read from the working thread)."""
+    import io
+
+    from curved_fold.cli.progress import Progress
+    from curved_fold.core.io.reader import read_pattern
+    from curved_fold.core.pipeline import fold_pattern
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    tty = Terminal()
+    pattern = read_pattern(SIMPLE.parent / "Treble_Clef.svg")
+    progress = Progress(stream=tty)
+    with progress.stage("folding"):
+        fold_pattern(pattern, angle=90)
+    lines = tty.getvalue().split("\r")
+    assert progress.drawn > 0
+    assert any(x.startswith(("curved_fold: folding: meshing", "curved_fold: folding: solving")) for x in lines), lines

@@ -127,11 +127,12 @@ def _name_user_path(exc: BaseException, tmp: str, user: Path) -> None:
 
 
 @contextlib.contextmanager
-def atomic_output(path: str | os.PathLike[str]) -> Iterator[Path]:
+def atomic_output(path: str | os.PathLike[str], *, allow_empty: bool = False) -> Iterator[Path]:
     """Yield a temporary path beside ``path`` (same suffix, so exporters pick the same format); when the block ends
     without an exception the file written there is fsynced and moved over ``path`` (through symlinks).
 
-    If the block raises, or nothing was written, the temporary file is removed and ``path`` keeps its old bytes.
+    If the block raises, or nothing was written (an empty file, unless ``allow_empty``: an exporter that silently
+    wrote nothing), the temporary file is removed and ``path`` keeps its old bytes.
     Exceptions leave with their messages naming ``path``, not the temporary file. Nest two of these to write a
     pair of files all-or-nothing: the inner one is moved into place first, and a failure there also discards the
     outer one.
@@ -155,7 +156,7 @@ def atomic_output(path: str | os.PathLike[str]) -> Iterator[Path]:
             size = os.path.getsize(tmp)
         except OSError:
             size = -1
-        if size <= 0:
+        if size < 0 or (size == 0 and not allow_empty):
             raise OutputError(f"{user}: the writer produced no data; the old file (if any) is kept")
         try:
             with open(tmp, "rb+") as fh:
@@ -175,7 +176,7 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
     Raises :class:`OutputError` (an :class:`OSError`: the folder does not exist or is not writable, the disk is
     full, the target is a device) naming ``path``, without leaving a temporary file behind.
     """
-    with atomic_output(path) as tmp:
+    with atomic_output(path, allow_empty=True) as tmp:
         try:
             with open(tmp, "wb") as fh:
                 fh.write(data)

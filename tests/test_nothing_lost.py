@@ -479,7 +479,7 @@ def test_progress_line_only_on_a_terminal_and_not_quiet():
     tty, pipe = Terminal(), io.StringIO()
     for progress in (Progress(stream=tty), Progress(stream=pipe), Progress(stream=Terminal(), quiet=True)):
         with progress.stage("meshing"):
-            time.sleep(1.3)
+            time.sleep(2.0)
     assert "\rcurved_fold: meshing... 1 s\033[K" in tty.getvalue() and tty.getvalue().endswith("\r\033[K")
     assert pipe.getvalue() == ""
     quick = Terminal()

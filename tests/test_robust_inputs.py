@@ -243,9 +243,9 @@ def test_tolerance_so_small_the_mesh_would_explode_is_capped_and_said() -> None:
     p = discretize([square(), curve], tolerance=1e-9, interval=1e-4)
     assert time.perf_counter() - t0 < 20
     assert p.n_edges <= 20_000  # a mesh the solver handles, not 200,000 sliver segments
-    # a tolerance far below the merge tolerance is raised to 1 % of it (chords that fine would be merged anyway)
+    # a tolerance far below the merge tolerance is raised to 1e-4 of it (chords that fine would be merged anyway)
     assert any(
-        "tolerance 1e-09 mm is below 0.01 × the merge tolerance; used 0.000333333 mm" in w for w in p.warnings
+        "tolerance 1e-09 mm is below 0.0001 × the merge tolerance; used 3.33333e-06 mm" in w for w in p.warnings
     ), p.warnings
     # the raised tolerance is still below what the merge tolerance lets survive: said too, naming the curve
     assert any("needs curve chords shorter than the merge tolerance" in w and "on wave" in w for w in p.warnings)

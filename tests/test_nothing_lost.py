@@ -222,6 +222,19 @@ def test_failing_bake_keeps_the_previous_bake(clean_scene):
             r"edges_vertices\[0\] = \[0, 3\]: index 3 out of range",
         ),
         ("empty.fold", "", r"malformed JSON at line 1, column 1"),
+        # issue 16: these two reached the Import operator as raw tracebacks (StopIteration, TypeError)
+        (
+            "empty_coords.fold",
+            '{"vertices_coords": [[], []], "edges_vertices": [[0, 1]], "edges_assignment": ["B"]}',
+            r"vertices_coords\[0\] = \[\]: a vertex needs 2 or 3 coordinates",
+        ),
+        (
+            "sources.fold",
+            '{"vertices_coords": [[0, 0], [1, 0]], "edges_vertices": [[0, 1]], "edges_assignment": ["B"], '
+            '"curved_fold:sources": 5, "curved_fold:edge_polyline": [0]}',
+            r"curved_fold:sources = 5 must be an array",
+        ),
+        ("nested.svg", '<svg xmlns="http://www.w3.org/2000/svg">' + "<g>" * 1000 + "</g>" * 1000 + "</svg>", "nesting"),
     ],
 )
 def test_failing_import_leaves_scene_unchanged(clean_scene, tmp_path, name, data, message):

@@ -589,8 +589,11 @@ FOLD_SQUARE = {
         ({"edges_foldAngle": [0, 0, 0, 0, 270]}, r"edges_foldAngle\[4\] = 270° is outside \[-180°, 180°\]"),
         ({"edges_foldAngle": [0, 0, 0, 0, -1e9]}, r"edges_foldAngle\[4\] = -1e\+09° is outside"),
         ({"curved_fold:edge_polyline": None}, r"curved_fold:edge_polyline = None must be an array"),
-        ({"curved_fold:edge_polyline": ["a"] * 5}, r"curved_fold:edge_polyline\[0\] = 'a' is not an index below"),
-        ({"curved_fold:edge_polyline": [0, 0, 0, 0, 10**9]}, r"curved_fold:edge_polyline\[4\] = 1000000000 is not an"),
+        ({"curved_fold:edge_polyline": ["a"] * 5}, r"curved_fold:edge_polyline\[0\] = 'a' is not -1 or an index below"),
+        (
+            {"curved_fold:edge_polyline": [0, 0, 0, 0, 10**9]},
+            r"curved_fold:edge_polyline\[4\] = 1000000000 is not -1 or an index below 5 edges",
+        ),
         ({"curved_fold:sources": 5}, r"curved_fold:sources = 5 must be an array"),
         ({"curved_fold:edge_from_curve": ["yes"] * 5}, r"curved_fold:edge_from_curve\[0\] = 'yes' is not true or"),
         ({"file_frames": [{"vertices_coords": "x"}]}, r"file_frames\[0\]\.vertices_coords = 'x' must be an array"),

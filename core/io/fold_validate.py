@@ -13,7 +13,8 @@ returns, the reader may index and convert without meeting a wrong type. What is 
 * ``edges_assignment`` strings; ``edges_foldAngle`` (and ``edges_foldAngles``, ``curved_fold:fold_angles``)
   numbers in [−180°, 180°] or null;
 * ``file_frames`` objects with the same rules, ``frame_parent`` an integer, ``frame_inherit`` a boolean;
-* our own ``curved_fold:`` fields: ``edge_polyline`` integer indices into ``sources`` (or the edges), ``sources``
+* our own ``curved_fold:`` fields: ``edge_polyline`` integer indices into ``sources`` (or the edges; −1 marks a
+  triangulation diagonal), ``sources``
   and ``warnings`` strings, ``edge_from_curve`` booleans, ``mesh_type`` a string.
 
 Index ranges against the vertex count and array lengths against each other are the reader's checks (it knows
@@ -155,9 +156,9 @@ class _Checker:
             sources = obj.get(PREFIX + "sources")
             bound = len(sources) if isinstance(sources, list) and sources else len(values)
             for i, x in enumerate(values):
-                if type(x) is not int or not 0 <= x < max(bound, 1):
+                if type(x) is not int or not -1 <= x < max(bound, 1):  # -1: a diagonal the triangulation added
                     what = f"{bound} sources" if isinstance(sources, list) and sources else f"{bound} edges"
-                    raise self.fail(f"{where}{name}[{i}]", f" = {_show(x)} is not an index below {what}")
+                    raise self.fail(f"{where}{name}[{i}]", f" = {_show(x)} is not -1 or an index below {what}")
         if not top:
             if "frame_parent" in obj and type(obj["frame_parent"]) is not int:
                 raise self.fail(where + "frame_parent", f" = {_show(obj['frame_parent'])} is not an integer")

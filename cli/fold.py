@@ -12,7 +12,7 @@ from pathlib import Path
 
 from ..core.io.atomic import OutputError, atomic_output
 from ..core.pattern.model import PatternError
-from .outputs import check_complete, check_outputs, finite_json
+from .outputs import check_outputs, finite_json
 from .progress import Progress
 
 OUTPUT_SUFFIXES = (".fold", ".obj", ".glb", ".blend")
@@ -92,7 +92,7 @@ def _write_mesh(tmp: Path, out: Path, fold, quiet: bool = False) -> None:
         write_folded_fold(tmp, fold.mesh, [fold.result.positions], [fold.result.fold_angles])
         return
     try:
-        from ..scene.export import export_folded_file
+        from ..scene.export import check_complete, export_folded_file
     except ImportError as exc:  # pragma: no cover - depends on the Blender side being installed
         raise PatternError(f"--out {out}: {out.suffix} output needs Blender's bpy ({exc})") from exc
     with _exporter_output(tmp, out, quiet) as log:

@@ -47,33 +47,3 @@ def finite_json(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
-
-
-def check_complete(path: Path, suffix: str, n_vertices: int) -> None:
-    """Raise :class:`OSError` unless the file a Blender exporter wrote at ``path`` is whole.
-
-    Blender's C++ OBJ writer ignores write errors (a full disk left an OBJ cut mid-line and the operator said
-    "File exported successfully"), so the file is checked before it replaces anything: an OBJ must end with a
-    newline and hold ``n_vertices`` ``v`` lines; a GLB's header length must equal the file size; a .blend file
-    must end with its ``ENDB`` block.
-    """
-    suffix = suffix.lower()
-    size = path.stat().st_size
-    if suffix == ".obj":
-        with open(path, "rb") as fh:
-            data = fh.read()
-        count = data.count(b"\nv ") + data.startswith(b"v ")
-        if not data.endswith(b"\n") or count != n_vertices:
-            raise OSError(f"the OBJ file is incomplete ({count} of {n_vertices} vertices, {size} bytes written)")
-    elif suffix == ".glb":
-        with open(path, "rb") as fh:
-            head = fh.read(12)
-        declared = int.from_bytes(head[8:12], "little") if len(head) == 12 and head[:4] == b"glTF" else -1
-        if declared != size:
-            raise OSError(f"the GLB file is incomplete ({size} of {declared} bytes written)")
-    elif suffix == ".blend":
-        with open(path, "rb") as fh:
-            fh.seek(max(size - 64, 0))
-            tail = fh.read()
-        if b"ENDB" not in tail:
-            raise OSError(f"the .blend file is incomplete (no end block; {size} bytes written)")

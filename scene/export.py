@@ -20,6 +20,7 @@ from xml.sax.saxutils import quoteattr
 import bpy
 import numpy as np
 
+from ..core.io.atomic import atomic_output
 from ..core.mesh.fold_mesh import FoldMesh
 
 BLENDER_SUFFIXES = (".obj", ".stl", ".glb", ".gltf", ".blend")
@@ -229,10 +230,55 @@ def export_folded_file(
             bake.bake_shape_keys(ob, numbers, list(arr), scene=scene)
         if animated:
             scene.frame_set(numbers[0])
-        with _exported_as(ob, name):
+        with _exported_as(ob, name), atomic_output(path) as tmp:
             scale = UNITS[unit] * mesh_object.mm_per_unit(scene) / 1000.0
-            _run_exporter(path, suffix, ob, animated=animated, scale=scale)
+            _run_exporter(tmp, suffix, ob, animated=animated, scale=scale)
+            check_complete(tmp, suffix, _exported_vertex_count(ob, scene))
     return path
+
+
+def check_complete(path: Path, suffix: str, n_vertices: int) -> None:
+    """Raise :class:`OSError` unless the file a Blender exporter wrote at ``path`` is whole.
+
+    Blender's C++ OBJ writer ignores write errors (a full disk left an OBJ cut mid-line and the operator said
+    "File exported successfully"), so the file is checked before it replaces anything: an OBJ must end with a
+    newline and hold ``n_vertices`` ``v`` lines; a GLB's header length must equal the file size; a .blend file
+    must end with its ``ENDB`` block.
+    """
+    suffix = suffix.lower()
+    size = path.stat().st_size
+    if suffix == ".obj":
+        with open(path, "rb") as fh:
+            data = fh.read()
+        count = data.count(b"\nv ") + data.startswith(b"v ")
+        if not data.endswith(b"\n") or count != n_vertices:
+            raise OSError(f"the OBJ file is incomplete ({count} of {n_vertices} vertices, {size} bytes written)")
+    elif suffix == ".glb":
+        with open(path, "rb") as fh:
+            head = fh.read(12)
+        declared = int.from_bytes(head[8:12], "little") if len(head) == 12 and head[:4] == b"glTF" else -1
+        if declared != size:
+            raise OSError(f"the GLB file is incomplete ({size} of {declared} bytes written)")
+    elif suffix == ".stl":
+        with open(path, "rb") as fh:
+            head = fh.read(84)
+        if len(head) == 84 and not head.startswith(b"solid"):
+            expected = 84 + 50 * int.from_bytes(head[80:84], "little")
+            if expected != size:
+                raise OSError(f"the STL file is incomplete ({size} of {expected} bytes written)")
+    elif suffix == ".blend":
+        with open(path, "rb") as fh:
+            fh.seek(max(size - 64, 0))
+            tail = fh.read()
+        if b"ENDB" not in tail:
+            raise OSError(f"the .blend file is incomplete (no end block; {size} bytes written)")
+
+
+def _exported_vertex_count(ob: bpy.types.Object, scene: bpy.types.Scene) -> int:
+    """Vertices the exporter writes for ``ob``: those of the evaluated mesh (modifiers applied, e.g. Solidify)."""
+    depsgraph = scene.view_layers[0].depsgraph
+    depsgraph.update()
+    return len(ob.evaluated_get(depsgraph).data.vertices)
 
 
 @contextlib.contextmanager

@@ -233,3 +233,34 @@ def test_khronos_gltf_validator_accepts_our_glb(empty_scene, wavy, tmp_path):
     issues = json.loads(proc.stdout)
     assert issues["numErrors"] == 0, issues["messages"][:5]
     assert issues["numWarnings"] == 0, issues["messages"][:5]
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".obj", ".stl", ".blend"])
+def test_blender_exporter_failing_midway_keeps_the_old_file(empty_scene, wavy, tmp_path, monkeypatch, suffix):
+    """Every Blender exporter writes to a temporary file that replaces the target only when whole (the Export
+    operator and the command line both go through ``export_folded_file``): a writer that dies half-way, or one that
+    silently leaves a cut file (Blender's OBJ writer ignores write errors), leaves the old file byte for byte."""
+    mesh, frames = wavy
+    path = tmp_path / f"w{suffix}"
+    path.write_bytes(b"the user's previous file")
+    real = export._run_exporter
+
+    def half_then_raise(tmp, *args, **kwargs):
+        real(tmp, *args, **kwargs)
+        Path(tmp).write_bytes(Path(tmp).read_bytes()[:100])
+        raise RuntimeError("Error: disk full")
+
+    def cut_silently(tmp, *args, **kwargs):
+        real(tmp, *args, **kwargs)
+        data = Path(tmp).read_bytes()
+        Path(tmp).write_bytes(data[: len(data) // 2])
+
+    for writer, error in ((half_then_raise, RuntimeError), (cut_silently, OSError)):
+        monkeypatch.setattr(export, "_run_exporter", writer)
+        with pytest.raises(error):
+            export.export_folded_file(path, mesh, frames[-1])
+        assert path.read_bytes() == b"the user's previous file"
+        assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]
+    monkeypatch.setattr(export, "_run_exporter", real)
+    export.export_folded_file(path, mesh, frames[-1])
+    assert path.stat().st_size > 1000

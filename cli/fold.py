@@ -142,6 +142,13 @@ def run(args: argparse.Namespace) -> int:
         f"strain mean {r['strain_mean_pct']:.3f} % max {r['strain_max_pct']:.3f} %, warp mean "
         f"{r['warp_mean_deg']:.2f}°, fold-angle error {r['fold_angle_error_mean_deg']:.2f}° → {out}"
     )
+    crossing = r.get("self_intersecting_faces")
+    if crossing is not None:
+        print(
+            f"self-intersection: {crossing} faces pass through the sheet elsewhere"
+            if crossing
+            else "self-intersection: none (no face passes through another)"
+        )
     if r.get("does_not_fold_as_assigned"):
         print("warning: " + r["does_not_fold_message"])
     for w in r.get("warnings", [])[:5]:

@@ -58,6 +58,14 @@ def measure(mesh: FoldMesh, result: FoldResult, percent: float) -> dict[str, Any
     return out
 
 
+def self_intersecting_faces(mesh: FoldMesh, positions: np.ndarray) -> int | None:
+    """Triangles passing through a non-adjacent triangle (``core.metrics.intersections``); None if not finite."""
+    from .metrics.intersections import count_intersecting_faces
+
+    positions = np.asarray(positions, dtype=np.float64)
+    return count_intersecting_faces(positions, mesh.triangles) if np.all(np.isfinite(positions)) else None
+
+
 def make_report(
     mesh: FoldMesh, result: FoldResult, percent: float, *, mesh_type: str, solver: str, warnings: list[str]
 ) -> dict[str, Any]:
@@ -83,6 +91,7 @@ def make_report(
     }
     # metrics.summary also reports mesh counts (as floats): keep the report's own integer counts
     report.update({k: v for k, v in measure(mesh, result, percent).items() if k not in report})
+    report["self_intersecting_faces"] = self_intersecting_faces(mesh, result.positions)
     error = report["fold_angle_error_mean_deg"]
     hingeless = bool(np.any(mesh.is_crease())) and not np.isfinite(error)
     report["does_not_fold_as_assigned"] = hingeless or bool(error > DOES_NOT_FOLD_DEG)

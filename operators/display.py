@@ -8,7 +8,7 @@ from bpy.props import EnumProperty
 
 from . import _common
 
-ATTRIBUTES = {"STRAIN": "cf_strain", "WARP": "cf_warp"}
+ATTRIBUTES = {"STRAIN": "cf_strain", "WARP": "cf_warp", "CROSSING": "cf_crossing"}
 
 
 def show_colours(ob: bpy.types.Object, kind: str, screens) -> int:
@@ -37,8 +37,9 @@ class CURVED_FOLD_OT_show_colours(bpy.types.Operator):
     bl_idname = "curved_fold.show_colours"
     bl_label = "Show Fold Colors"
     bl_description = (
-        "Color the active folded mesh by strain (Origami Simulator's map: blue 0 → red 5 %) or warp angle "
-        "(blue 0° → red 10°) in the 3D viewports, or go back to material colors"
+        "Color the active folded mesh by strain (Origami Simulator's map: blue 0 → red 5 %), warp angle "
+        "(blue 0° → red 10°) or self-intersection (crossing faces red) in the 3D viewports, or go back to material "
+        "colors"
     )
     bl_options = {"REGISTER", "UNDO"}
 
@@ -48,6 +49,7 @@ class CURVED_FOLD_OT_show_colours(bpy.types.Operator):
         items=(
             ("STRAIN", "Strain", "Per-vertex strain, Origami Simulator's color map"),
             ("WARP", "Warp Angle", "Per-face warp angle (ruling alignment; the paper's quality measure)"),
+            ("CROSSING", "Self-Intersection", "Faces passing through the sheet elsewhere in red, the others in blue"),
             ("NONE", "Material", "Back to material colors"),
         ),
         default="STRAIN",

@@ -128,6 +128,14 @@ class VIEW3D_PT_curved_fold_animation(SidebarPanel, bpy.types.Panel):
         row.operator("curved_fold.export_pattern_svg", text="Export SVG", icon="FILE_IMAGE")
 
 
+def _crossing_text(ob) -> str:
+    """The panel's self-intersection line: how many faces pass through the sheet elsewhere."""
+    count = ob.get("cf_self_intersecting_faces") if ob is not None else None
+    if count is None or count < 0:
+        return "not measured"
+    return f"{count} faces pass through the sheet" if count else "none"
+
+
 class VIEW3D_PT_curved_fold_figures(SidebarPanel, bpy.types.Panel):
     bl_label = "Last Run"
     bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
@@ -142,6 +150,7 @@ class VIEW3D_PT_curved_fold_figures(SidebarPanel, bpy.types.Panel):
             ("Strain", f"{props.last_strain_mean:.4f} % mean, {props.last_strain_max:.4f} % max"),
             ("Warp", f"{props.last_warp_mean:.4f}° mean"),
             ("Fold error", f"{props.last_fold_error:.3f}° mean"),
+            ("Crossing", _crossing_text(context.active_object)),
         )
         for label, value in rows:
             split = col.split(factor=0.35)
@@ -150,6 +159,7 @@ class VIEW3D_PT_curved_fold_figures(SidebarPanel, bpy.types.Panel):
         row = self.layout.row(align=True)
         row.operator("curved_fold.show_colours", text="Strain").kind = "STRAIN"
         row.operator("curved_fold.show_colours", text="Warp").kind = "WARP"
+        row.operator("curved_fold.show_colours", text="Crossing").kind = "CROSSING"
         row.operator("curved_fold.show_colours", text="", icon="MATERIAL").kind = "NONE"
 
 

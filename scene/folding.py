@@ -14,7 +14,7 @@ import numpy as np
 
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
-from . import bake, mesh_object
+from . import bake, mesh_object, self_intersection
 from .fold_settings import override_angle_degrees, override_fold_angles, pattern_parameters, settings_dict
 
 
@@ -212,6 +212,7 @@ def store_figures(ob: bpy.types.Object, out: FoldOutcome) -> None:
     err = rep.get("fold_angle_error_mean_deg")
     props.last_fold_error = float(err) if err is not None and np.isfinite(err) else 0.0
     props.last_message = fold_angle_error_message(rep)
+    self_intersection.write_crossing_colours(ob, out.mesh, out.positions)
 
 
 def figures_text(props) -> str:

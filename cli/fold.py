@@ -31,6 +31,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--solver", default="fast", choices=("fast", "faithful", "isometric"), help="solver method")
     p.add_argument("--report", default=None, help="write the report as JSON here")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors (no summary, no progress)")
+    p.add_argument(
+        "--constraints",
+        default=None,
+        help="pins and glue as JSON (default: the .fold input's curved_fold:pins/glue, or <input>.constraints.json)",
+    )
     p.set_defaults(func=run)
 
 
@@ -110,6 +115,7 @@ def _write_mesh(tmp: Path, out: Path, fold, quiet: bool = False) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..core.io.reader import read_pattern
     from ..core.pipeline import fold_pattern
+    from ..core.solve.constraints import read_constraints
 
     out = Path(args.out)
     if out.suffix.lower() not in OUTPUT_SUFFIXES:
@@ -119,9 +125,15 @@ def run(args: argparse.Namespace) -> int:
     progress = Progress(quiet=args.quiet)
     with progress.stage(Path(args.input).name):
         pattern = read_pattern(args.input, interval=args.interval, tolerance=args.tolerance)
+        held = read_constraints(args.input, args.constraints)
     with progress.stage(f"folding {pattern.n_edges:,} segments"):
         fold = fold_pattern(
-            pattern, angle=args.angle, percent=args.percent / 100.0, mesh_type=args.mesh, solver=args.solver
+            pattern,
+            angle=args.angle,
+            percent=args.percent / 100.0,
+            mesh_type=args.mesh,
+            solver=args.solver,
+            constraints=held,
         )
     r = fold.report
     # both files or neither: the report is moved into place first, and if that fails the mesh is not written
@@ -149,6 +161,11 @@ def run(args: argparse.Namespace) -> int:
             if crossing
             else "self-intersection: none (no face passes through another)"
         )
+    if r.get("pins") or r.get("glue"):
+        line = f"pins {r['pins']}" + (f" (max {r['pin_error_max_mm']:.1e} mm off target)" if r["pins"] else "")
+        if r["glue"]:
+            line += f", glue {r['glue']} (max gap {r['glue_gap_max_mm']:.2e} mm = {r['glue_gap_rel']:.1e} of diagonal)"
+        print(line)
     if r.get("does_not_fold_as_assigned"):
         print("warning: " + r["does_not_fold_message"])
     for w in r.get("warnings", [])[:5]:

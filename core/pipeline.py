@@ -15,6 +15,7 @@ import numpy as np
 
 from .mesh.fold_mesh import FoldMesh
 from .pattern.model import CreasePattern, PatternError
+from .solve.constraints import Constraints, ConstraintSpec
 from .solve.solver import FoldResult, Solver, SolverSettings
 
 DOES_NOT_FOLD_DEG = 15.0
@@ -67,7 +68,15 @@ def self_intersecting_faces(mesh: FoldMesh, positions: np.ndarray) -> int | None
 
 
 def make_report(
-    mesh: FoldMesh, result: FoldResult, percent: float, *, mesh_type: str, solver: str, warnings: list[str]
+    mesh: FoldMesh,
+    result: FoldResult,
+    percent: float,
+    *,
+    mesh_type: str,
+    solver: str,
+    warnings: list[str],
+    constraints: Constraints | None = None,
+    start: np.ndarray | None = None,
 ) -> dict[str, Any]:
     """The JSON-ready report of one solve: sizes, timings, solver counts, metrics and the Fig. 7 verdict."""
     report: dict[str, Any] = {
@@ -92,6 +101,8 @@ def make_report(
     # metrics.summary also reports mesh counts (as floats): keep the report's own integer counts
     report.update({k: v for k, v in measure(mesh, result, percent).items() if k not in report})
     report["self_intersecting_faces"] = self_intersecting_faces(mesh, result.positions)
+    if constraints is not None and not constraints.empty:
+        report.update(constraints.report(mesh, result.positions, start))
     error = report["fold_angle_error_mean_deg"]
     hingeless = bool(np.any(mesh.is_crease())) and not np.isfinite(error)
     report["does_not_fold_as_assigned"] = hingeless or bool(error > DOES_NOT_FOLD_DEG)
@@ -115,10 +126,21 @@ def refold_mesh(
     solver: str = "fast",
     settings: SolverSettings | None = None,
     start: np.ndarray | None = None,
+    constraints: Constraints | None = None,
 ) -> FoldRun:
-    """Fold an already built mesh at ``percent`` (warm-started from ``start``, positions in mm, if given)."""
-    result = Solver(mesh, settings, solver).solve(percent, start=start)
-    report = make_report(mesh, result, percent, mesh_type=mesh.mesh_type, solver=solver, warnings=list(mesh.warnings))
+    """Fold an already built mesh at ``percent`` (warm-started from ``start``, positions in mm, if given), with
+    ``constraints`` (pins and glue on its vertices) if given."""
+    result = Solver(mesh, settings, solver, constraints).solve(percent, start=start)
+    report = make_report(
+        mesh,
+        result,
+        percent,
+        mesh_type=mesh.mesh_type,
+        solver=solver,
+        warnings=list(mesh.warnings),
+        constraints=constraints,
+        start=start,
+    )
     return FoldRun(mesh, result, report)
 
 
@@ -131,16 +153,19 @@ def fold_pattern(
     solver: str = "fast",
     settings: SolverSettings | None = None,
     backend: str = "auto",
+    constraints: ConstraintSpec | None = None,
 ) -> FoldRun:
     """Triangulate ``pattern`` and fold it to equilibrium at ``percent`` (1.0 = 100 %).
 
-    ``angle`` (degrees) is the target of every M/V crease without one (valley +, mountain −).
+    ``angle`` (degrees) is the target of every M/V crease without one (valley +, mountain −). ``constraints`` (pins
+    and glue named by flat points of the pattern) are mapped onto the mesh's vertices.
     """
     from .mesh.build import build_mesh
 
     pattern = _with_angle(pattern, angle)
     mesh = build_mesh(pattern, mesh_type=mesh_type, backend=backend)
-    result = Solver(mesh, settings, solver).solve(percent)
+    held = None if constraints is None or constraints.empty else constraints.resolve(mesh)
+    result = Solver(mesh, settings, solver, held).solve(percent)
     warnings = list(mesh.warnings)  # build_mesh starts them with the pattern's: adding those again printed them twice
-    report = make_report(mesh, result, percent, mesh_type=mesh_type, solver=solver, warnings=warnings)
+    report = make_report(mesh, result, percent, mesh_type=mesh_type, solver=solver, warnings=warnings, constraints=held)
     return FoldRun(mesh, result, report)

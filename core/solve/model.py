@@ -13,11 +13,14 @@ Elements (reference §3.2):
   Origami Simulator drives flat) are *facets* (``k = panel_stiffness · L0``, target 0). U and interior B edges get
   a hinge of stiffness 0: they are free, but their fold angle is still tracked and reported;
 * **face-angle springs** on the three corners of every triangle (``k_f = face_stiffness``, no length scaling).
+
+Glue (issue 17, :func:`with_glue`) appends **zero-length bars** between glued vertex pairs after the mesh's bars:
+energy ``½ k ℓ²``, so they pull the pair together and their length at equilibrium is the remaining gap.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -53,6 +56,7 @@ class BarHingeModel:
     face_alpha0: np.ndarray
     face_k: float
     n_edges: int
+    n_glue: int = 0
 
     @property
     def n_nodes(self) -> int:
@@ -196,6 +200,23 @@ def build_model(
         face_alpha0=alpha0,
         face_k=float(face_stiffness),
         n_edges=len(mesh.edges),
+    )
+
+
+def with_glue(model: BarHingeModel, pairs: np.ndarray, stiffness: float, damping: float = 0.45) -> BarHingeModel:
+    """``model`` with a zero-length bar of stiffness ``stiffness`` (normalised units) between each vertex pair of
+    ``pairs`` ``(g, 2)``, appended after its bars (the last ``n_glue`` bars are glue)."""
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if len(pairs) == 0:
+        return model
+    k = np.full(len(pairs), float(stiffness))
+    return replace(
+        model,
+        bar_nodes=np.concatenate([model.bar_nodes, pairs]),
+        bar_length=np.concatenate([model.bar_length, np.zeros(len(pairs))]),
+        bar_k=np.concatenate([model.bar_k, k]),
+        bar_c=np.concatenate([model.bar_c, 2.0 * damping * np.sqrt(k)]),
+        n_glue=model.n_glue + len(pairs),
     )
 
 

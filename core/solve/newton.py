@@ -17,6 +17,11 @@ dynamics towards it. Each iteration:
 
 Near convergence the energy decrease falls under floating-point resolution; there a step is accepted when it
 reduces the residual force instead.
+
+Pinned nodes (``fixed``, a boolean mask of degrees of freedom, ``core.solve.constraints``) are fixed degrees of
+freedom, not stiff springs: their force is left out of the right-hand side and the residual, their step is zero
+(CG runs on the free subspace), and the factorised preconditioner gets a large diagonal there so it decouples them.
+The free block is solved exactly as without pins, so convergence stays quadratic.
 """
 
 from __future__ import annotations
@@ -39,6 +44,9 @@ PCG_MAX = 12
 
 PCG_RTOL = 1e-2
 """Relative CG residual of the inexact Newton step (the outer iteration corrects what is left)."""
+
+PIN_DIAGONAL = 1e12
+"""Diagonal added to fixed degrees of freedom in the factorisation (relative to the force scale): decouples them."""
 
 
 class HessianAssembler:
@@ -135,12 +143,16 @@ def newton_steps(
     assembler: HessianAssembler | None = None,
     time_limit: float | None = None,
     lm_lambda: float = 1e-3,
+    fixed: np.ndarray | None = None,
 ) -> Generator[NewtonProgress, None, tuple[np.ndarray, np.ndarray, Evaluation, NewtonStats, float]]:
     """Minimise the energy from ``x0`` (normalised) with fold-angle history ``theta0``, one iteration per ``next``.
 
     Yields a :class:`NewtonProgress` after every accepted iteration, so a caller can work in slices (Blender's modal
     jobs) and stop between any two; the generator's return value (``StopIteration.value``) is
     ``(x, theta, evaluation at x, stats, final λ)``. The residual is ``max_i |F_i| / force_scale``.
+
+    ``fixed`` (``(n, 3)`` bool): pinned degrees of freedom; they keep their value in ``x0`` and their (reaction)
+    forces are left out of the residual.
     """
     assembler = assembler or HessianAssembler(model)
     stats = NewtonStats()
@@ -148,10 +160,16 @@ def newton_steps(
     x = np.array(x0, dtype=np.float64)
     ev = evaluate(model, x, theta0, percent, jacobians=True)
     stats.force_evaluations += 1
+    free = None if fixed is None or not np.any(fixed) else ~np.asarray(fixed, dtype=bool).reshape(-1, 3)
+    pins = None if free is None else (~free).reshape(-1).astype(np.float64) * PIN_DIAGONAL * force_scale
+
+    def unpinned(forces: np.ndarray) -> np.ndarray:
+        return forces if free is None else forces * free
+
     lam = float(lm_lambda) * force_scale
     lam_min = 1e-9 * force_scale
     for it in range(max_iterations + 1):
-        residual = float(np.max(np.linalg.norm(ev.forces, axis=1))) / force_scale
+        residual = float(np.max(np.linalg.norm(unpinned(ev.forces), axis=1))) / force_scale
         stats.residual = residual
         if not np.isfinite(residual):
             stats.message = f"non-finite residual force at Newton iteration {it}"
@@ -167,11 +185,11 @@ def newton_steps(
             stats.message = f"not converged: residual {residual:.2e} after {it} iterations (time limit {time_limit}s)"
             break
         stats.iterations = it + 1
-        rhs = ev.forces.reshape(-1)
+        rhs = unpinned(ev.forces).reshape(-1)
         accepted = False
         for _attempt in range(12):
             try:
-                p = _step(model, assembler, ev, rhs, lam, stats).reshape(-1, 3)
+                p = _step(model, assembler, ev, rhs, lam, stats, pins).reshape(-1, 3)
             except np.linalg.LinAlgError:
                 assembler.factor = None
                 lam *= 10.0
@@ -204,7 +222,7 @@ def newton_steps(
                     # energy at round-off level: judge the step by the residual force instead
                     rev = evaluate(model, trial, ev.theta, percent, jacobians=False)
                     stats.force_evaluations += 1
-                    if np.max(np.linalg.norm(rev.forces, axis=1)) < residual * force_scale:
+                    if np.max(np.linalg.norm(unpinned(rev.forces), axis=1)) < residual * force_scale:
                         accepted = True
                         break
                 a *= 0.5
@@ -223,26 +241,41 @@ def newton_steps(
         else:
             ev = evaluate(model, x, tev.theta, percent, jacobians=True)
             stats.force_evaluations += 1
-        yield NewtonProgress(it + 1, float(np.max(np.linalg.norm(ev.forces, axis=1))) / force_scale, x, ev.theta)
+        yield NewtonProgress(
+            it + 1, float(np.max(np.linalg.norm(unpinned(ev.forces), axis=1))) / force_scale, x, ev.theta
+        )
     return x, ev.theta, ev, stats, lam / force_scale
 
 
 def _step(
-    model: BarHingeModel, assembler: HessianAssembler, ev: Evaluation, rhs: np.ndarray, lam: float, stats: NewtonStats
+    model: BarHingeModel,
+    assembler: HessianAssembler,
+    ev: Evaluation,
+    rhs: np.ndarray,
+    lam: float,
+    stats: NewtonStats,
+    pins: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Solve ``(H + λ I) p = rhs``: CG preconditioned by the cached factorisation, refactorised when CG stalls."""
+    """Solve ``(H + λ I) p = rhs``: CG preconditioned by the cached factorisation, refactorised when CG stalls.
+
+    ``pins`` (``3n``, > 0 on fixed degrees of freedom): the step is solved on the free ones only (zero elsewhere)."""
     n = model.n_nodes
+    free = None if pins is None else pins == 0
+
+    def project(v: np.ndarray) -> np.ndarray:
+        return v if free is None else v * free
+
     if assembler.factor is not None and assembler.last_cg_iterations < PCG_MAX:
         p = np.zeros_like(rhs)
         r = rhs.copy()
-        z = assembler.factor.apply(r)
+        z = project(assembler.factor.apply(r))
         stats.linear_solves += 1
         d = z.copy()
         rz = float(r @ z)
         goal = PCG_RTOL * float(np.linalg.norm(rhs))
         for cg in range(PCG_MAX):
             assembler.last_cg_iterations = cg + 1
-            q = hessian_matvec(model, ev, d.reshape(n, 3)).reshape(-1) + lam * d
+            q = project(hessian_matvec(model, ev, d.reshape(n, 3)).reshape(-1)) + lam * d
             stats.hessian_products += 1
             dq = float(d @ q)
             if dq <= 0 or not np.isfinite(dq):
@@ -252,14 +285,14 @@ def _step(
             r -= a * q
             if float(np.linalg.norm(r)) <= goal:
                 return p
-            z = assembler.factor.apply(r)
+            z = project(assembler.factor.apply(r))
             stats.linear_solves += 1
             rz_new = float(r @ z)
             d = z + (rz_new / rz) * d
             rz = rz_new
     H = assembler.assemble(ev)
     stats.hessian_assemblies += 1
-    assembler.factor = assembler.matrix.factor(H, lam)
+    assembler.factor = assembler.matrix.factor(H, lam if pins is None else lam + pins)
     assembler.last_cg_iterations = 0
     stats.linear_solves += 1
-    return assembler.factor.apply(rhs)
+    return project(assembler.factor.apply(rhs))

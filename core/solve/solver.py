@@ -21,10 +21,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh
+from ..pattern.model import PatternError
+from .constraints import GLUE_STIFFNESS, Constraints
 from .faithful import SolverError, faithful_solve, time_step
 from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
-from .model import BarHingeModel, build_model
+from .model import BarHingeModel, build_model, with_glue
 from .newton import HessianAssembler, newton_steps
 
 METHODS = ("fast", "faithful", "isometric")
@@ -115,9 +117,21 @@ class Solver:
     The animation and the pipeline keep one of these so the per-mesh preprocessing is paid once.
     """
 
-    def __init__(self, mesh: FoldMesh, settings: SolverSettings | None = None, method: str = "fast"):
+    def __init__(
+        self,
+        mesh: FoldMesh,
+        settings: SolverSettings | None = None,
+        method: str = "fast",
+        constraints: Constraints | None = None,
+    ):
         if method not in METHODS:
             raise ValueError(f"unknown solver method {method!r}; choose one of {', '.join(METHODS)}")
+        if constraints is not None and constraints.empty:
+            constraints = None
+        if constraints is not None:
+            if method == "faithful":
+                raise PatternError("pins and glue need the fast or isometric solver, not the faithful one")
+            constraints.check(mesh.n_vertices)
         settings = settings or SolverSettings()
         if method == "isometric":
             settings = replace(settings, isometric=True)
@@ -132,6 +146,9 @@ class Solver:
             face_stiffness=settings.face_stiffness,
             damping=settings.damping,
         )
+        self.constraints = constraints
+        if constraints is not None:  # glue: zero-length bars after the mesh's (core.solve.constraints)
+            self.model = with_glue(self.model, constraints.glue, GLUE_STIFFNESS, settings.damping)
         self.force_scale = characteristic_force(self.model, settings.crease_stiffness, settings.panel_stiffness)
         self._assembler: HessianAssembler | None = None
         self._dt: float | None = None
@@ -245,6 +262,8 @@ class Solver:
         x0 = model.rest.copy() if start is None else model.from_mm(start)
         if x0.shape != model.rest.shape or not np.all(np.isfinite(x0)):
             raise SolverError(f"start positions must be a finite ({model.n_nodes}, 3) array, got shape {x0.shape}")
+        if self.constraints is not None:
+            x0 = model.from_mm(self.constraints.place_pins(model.to_mm(x0)))
         if theta_prev is None:
             theta_prev = self.start_angles(x0, percent)
         return x0, theta_prev
@@ -297,6 +316,7 @@ class Solver:
             assembler=self.assembler,
             time_limit=s.time_limit,
             lm_lambda=self.lm_lambda,
+            fixed=None if self.constraints is None else self.constraints.fixed_mask(model.n_nodes),
         )
 
 

@@ -1,0 +1,152 @@
+"""Pins and glue (issue 17): pinned vertices are fixed degrees of freedom of the Newton solver (exactly on target,
+iterations within 2× of the free fold), glue closes a cylinder to a gap ≤ 1e-6 of the diagonal, and the command
+line reads both from ``curved_fold:`` FOLD fields or a JSON file beside the pattern."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.io.reader import read_pattern
+from curved_fold.core.mesh.build import build_mesh
+from curved_fold.core.pattern.model import PatternError
+from curved_fold.core.solve.constraints import Constraints, ConstraintSpec, parse_constraints
+from curved_fold.core.solve.solver import Solver
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+STRIP_W, STRIP_H, PANELS = 240.0, 60.0, 8
+
+
+def strip_svg(crease_deg: float = 40.0) -> str:
+    """An eight-panel strip with seven vertical valley creases of ``crease_deg``: 5° short of the 45° a closed
+    octagonal tube needs, so without glue its ends stay apart."""
+    paths = "".join(
+        f'<path d="M {STRIP_W * k / PANELS:g} 0 L {STRIP_W * k / PANELS:g} {STRIP_H:g}" fill="none" '
+        f'stroke="#0000ff" opacity="{crease_deg / 180:.6f}"/>'
+        for k in range(1, PANELS)
+    )
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{STRIP_W:g}mm" height="{STRIP_H:g}mm" '
+        f'viewBox="0 0 {STRIP_W:g} {STRIP_H:g}"><rect x="0" y="0" width="{STRIP_W:g}" height="{STRIP_H:g}" '
+        f'fill="none" stroke="#000000"/>{paths}</svg>'
+    )
+
+
+SEAM = [[[0.0, 0.0], [STRIP_W, 0.0]], [[0.0, -STRIP_H], [STRIP_W, -STRIP_H]]]
+"""Glue the strip's two short edges together (pattern coordinates: SVG y negated)."""
+
+
+@pytest.fixture(scope="module")
+def single_curve_mesh():
+    return build_mesh(read_pattern(EXAMPLES / "single_curve.svg"))
+
+
+def test_pins_are_exact_and_cost_at_most_twice_the_iterations(single_curve_mesh):
+    mesh = single_curve_mesh
+    free = Solver(mesh).solve(1.0)
+    assert free.converged
+    left = np.flatnonzero(mesh.vertices[:, 0] < 1e-9)  # the left border stays where it is (flat on the table)
+    right = np.flatnonzero(mesh.vertices[:, 0] > 150.0 - 1e-9)
+    target = free.positions[right] + np.array([0.0, 0.0, 12.0])  # and the right border is lifted by 12 mm
+    held = Constraints(
+        np.concatenate([left, right]), np.concatenate([np.full((len(left), 3), np.nan), target]), np.zeros((0, 2))
+    )
+    pinned = Solver(mesh, constraints=held).solve(1.0)
+    assert pinned.converged
+    assert np.max(np.linalg.norm(pinned.positions[left] - mesh.vertices_3d[left], axis=1)) <= 1e-9
+    assert np.max(np.linalg.norm(pinned.positions[right] - target, axis=1)) <= 1e-9
+    assert pinned.iterations <= 2 * free.iterations, (pinned.iterations, free.iterations)
+    # the free vertices moved: the right border is really held up, not ignored
+    inner = np.setdiff1d(np.arange(mesh.n_vertices), held.pins)
+    assert np.max(np.abs(pinned.positions[inner, 2] - free.positions[inner, 2])) > 1.0
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="Gauss–Newton Hessian: with one corner triangle pinned the sheet pivots about it, a mode whose curvature "
+    "comes largely from the omitted hinge terms k(θ−θ̄)∇²θ, so the tail is linear (141 iterations against 14 free). "
+    "An exact Hessian (finite differences, measured) takes the same state from 1e-5 to 4e-13 in three steps; the "
+    "solver helper's exact Hessian should make this pass — then remove this mark.",
+)
+def test_corner_pivot_converges_like_the_free_fold(single_curve_mesh):
+    mesh = single_curve_mesh
+    free = Solver(mesh).solve(1.0)
+    solver = Solver(mesh, constraints=Constraints(mesh.triangles[0]))
+    residuals = [step.residual for step in solver.solve_steps(1.0)]
+    assert len(residuals) <= 2 * free.iterations
+    assert residuals[-1] < 1e-2 * residuals[-3]  # fast terminal convergence
+
+
+def _strip(tmp_path: Path) -> Path:
+    svg = tmp_path / "strip.svg"
+    svg.write_text(strip_svg())
+    return svg
+
+
+def test_glue_closes_a_cylinder(tmp_path):
+    from curved_fold.core.pipeline import fold_pattern
+
+    pattern = read_pattern(_strip(tmp_path))
+    open_run = fold_pattern(pattern)
+    spec = parse_constraints({"glue": SEAM})
+    ends = spec.resolve(open_run.mesh)
+    assert np.max(ends.gaps(open_run.result.positions)) > 0.05 * open_run.mesh.diagonal  # open without glue
+    glued = fold_pattern(pattern, constraints=spec)
+    r = glued.report
+    assert r["converged"] and r["glue"] == 2
+    assert r["glue_gap_rel"] <= 1e-6
+    assert np.max(ends.gaps(glued.result.positions)) <= 1e-6 * glued.mesh.diagonal
+    assert r["iterations"] <= 2 * open_run.report["iterations"]
+
+
+def test_cli_reads_sidecar_json_and_fold_fields(tmp_path, capsys):
+    from curved_fold.cli import main
+    from curved_fold.core.io.fold import write_pattern_fold
+
+    svg = _strip(tmp_path)
+    (tmp_path / "strip.constraints.json").write_text(json.dumps({"glue": SEAM, "pins": [[120.0, 0.0]]}))
+    report = tmp_path / "r.json"
+    assert main(["fold", str(svg), "--out", str(tmp_path / "o.fold"), "--report", str(report)]) == 0
+    r = json.loads(report.read_text())
+    assert r["glue"] == 2 and r["pins"] == 1 and r["glue_gap_rel"] <= 1e-6 and r["pin_error_max_mm"] <= 1e-9
+    assert "glue 2 (max gap" in capsys.readouterr().out
+    # the same glue as documented curved_fold: fields of a FOLD pattern
+    fold = tmp_path / "strip_cp.fold"
+    write_pattern_fold(fold, read_pattern(svg))
+    data = json.loads(fold.read_text())
+    data["curved_fold:glue"] = SEAM
+    fold.write_text(json.dumps(data))
+    assert main(["fold", str(fold), "--out", str(tmp_path / "o2.fold"), "--report", str(report)]) == 0
+    assert json.loads(report.read_text())["glue"] == 2
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("{not json", "not valid JSON"),
+        (json.dumps({"pins": [[1, 2, 3]]}), "pin 0 must be 2 finite numbers"),
+        (json.dumps({"glue": [[[0, 0]]]}), "glue 0 must be a pair of points"),
+        (json.dumps({"pins": [[70.0, -30.0]]}), "is not a vertex of the meshed sheet"),
+    ],
+)
+def test_bad_constraints_one_clear_line(tmp_path, capsys, content, message):
+    from curved_fold.cli import main
+
+    svg = _strip(tmp_path)
+    bad = tmp_path / "bad.json"
+    bad.write_text(content)
+    assert main(["fold", str(svg), "--out", str(tmp_path / "o.fold"), "--constraints", str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+
+
+def test_faithful_solver_refuses_constraints(single_curve_mesh):
+    with pytest.raises(PatternError, match="fast or isometric"):
+        Solver(single_curve_mesh, method="faithful", constraints=Constraints([0]))
+    with pytest.raises(PatternError, match="not in the mesh"):
+        Solver(single_curve_mesh, constraints=Constraints([10**6]))
+    assert ConstraintSpec().empty

@@ -136,6 +136,12 @@ def _crossing_text(ob) -> str:
     return f"{count} faces pass through the sheet" if count else "none"
 
 
+def _glue_text(ob) -> str:
+    """The panel's glue line: the largest gap left between glued vertices in the last run."""
+    gap = ob.get("cf_glue_gap_mm", -1.0) if ob is not None else -1.0
+    return f"{gap:.2e} mm (largest)" if gap >= 0 else "no glue (vertex groups cf_glue_a / cf_glue_b)"
+
+
 class VIEW3D_PT_curved_fold_figures(SidebarPanel, bpy.types.Panel):
     bl_label = "Last Run"
     bl_parent_id = "VIEW3D_PT_curved_fold_mesh"
@@ -151,6 +157,7 @@ class VIEW3D_PT_curved_fold_figures(SidebarPanel, bpy.types.Panel):
             ("Warp", f"{props.last_warp_mean:.4f}° mean"),
             ("Fold error", f"{props.last_fold_error:.3f}° mean"),
             ("Crossing", _crossing_text(context.active_object)),
+            ("Glue gap", _glue_text(context.active_object)),
         )
         for label, value in rows:
             split = col.split(factor=0.35)
@@ -161,6 +168,7 @@ class VIEW3D_PT_curved_fold_figures(SidebarPanel, bpy.types.Panel):
         row.operator("curved_fold.show_colours", text="Warp").kind = "WARP"
         row.operator("curved_fold.show_colours", text="Crossing").kind = "CROSSING"
         row.operator("curved_fold.show_colours", text="", icon="MATERIAL").kind = "NONE"
+        self.layout.operator("curved_fold.add_pin_hooks", icon="EMPTY_AXIS")
 
 
 CLASSES = (

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
-from . import bake, mesh_object, self_intersection
+from . import bake, mesh_object, pins, self_intersection
 from .fold_settings import override_angle_degrees, override_fold_angles, pattern_parameters, settings_dict
 
 
@@ -171,7 +171,10 @@ def resolve_stored(
     mesh = mesh_object.read_fold_mesh(ob)
     pct = props.fold_percent / 100.0 if percent is None else percent
     settings = solver_settings(props, max_iterations=max_iterations)
-    return outcome_from_run(refold_mesh(mesh, pct, solver=props.solver, settings=settings, start=start), pct)
+    held = pins.constraints_from_object(ob, mesh)  # pins hold vertices where they are: start from the shape shown
+    start = pins.current_positions(ob) if held is not None and start is None else start
+    run = refold_mesh(mesh, pct, solver=props.solver, settings=settings, start=start, constraints=held)
+    return outcome_from_run(run, pct)
 
 
 def source_objects(ob: bpy.types.Object) -> list[bpy.types.Object]:
@@ -213,6 +216,7 @@ def store_figures(ob: bpy.types.Object, out: FoldOutcome) -> None:
     props.last_fold_error = float(err) if err is not None and np.isfinite(err) else 0.0
     props.last_message = fold_angle_error_message(rep)
     self_intersection.write_crossing_colours(ob, out.mesh, out.positions)
+    pins.store_figures(ob, rep)
 
 
 def figures_text(props) -> str:

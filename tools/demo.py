@@ -9,6 +9,13 @@ For each ``examples/*.svg`` (the project's own crease patterns, see ``examples/m
    pattern as drawn (border black, mountain red, valley blue), on the right the folded mesh with its creases, and
    the run's figures (faces, solver time, strain, warp, fold-angle error) in the title.
 
+Then the pins-and-glue demo (issue 17): ``out/ring_glued.svg``, a strip of eight panels between curved valley creases
+that stop 5° short of closing, is folded by the command line with ``out/ring_glued.constraints.json`` beside it (its
+two short edges glued into a ring, two points of its lower edge pinned to the table 88 mm apart, which pulls the ring
+into an oval), and pictured in ``docs/img/pins_glue.png`` through the add-on (Fold, then the ``cf_glue_a``/
+``cf_glue_b``/``cf_pins`` vertex groups, Add Pin Hooks, the hooks moved to the targets, Re-solve): the open fold the
+creases make alone beside the held one, which neither creases nor glue alone can make.
+
 Then ``docs/img/make_pictures.py`` (the operators' fold-percent / strain / warp pictures) is run on Origami
 Simulator's ``wavy_pleats.svg`` from the shared fixtures (skipped, with a message, when they are not beside the
 repository).
@@ -142,6 +149,127 @@ def make_picture(svg: Path, png: Path) -> None:
     print(f"wrote {png}")
 
 
+RING_W, RING_H, RING_PANELS, RING_CREASE_DEG = 240.0, 60.0, 8, 40.0
+RING_CONSTRAINTS = {
+    "glue": [[[0.0, 0.0], [RING_W, 0.0]], [[0.0, -RING_H], [RING_W, -RING_H]]],
+    "pins": [
+        {"point": [60.0, -RING_H], "target": [60.0, -RING_H, 0.0]},
+        {"point": [180.0, -RING_H], "target": [148.0, -RING_H, 0.0]},
+    ],
+}
+"""Glue the strip's short edges (a ring); pin two lower crease ends on the table 88 mm apart (the round ring would
+hold them about 75 mm apart), in pattern coordinates (mm, SVG y negated)."""
+
+
+def ring_svg() -> str:
+    """The ring strip: eight panels between curved valley creases of 40° (a closed octagon needs 45°)."""
+    paths = "".join(
+        f'  <path d="M {x:g} 0 C {x + 7:g} 20 {x + 7:g} 40 {x:g} {RING_H:g}" fill="none" stroke="#0000ff" '
+        f'opacity="{RING_CREASE_DEG / 180:.6f}"/>\n'
+        for x in (RING_W * k / RING_PANELS for k in range(1, RING_PANELS))
+    )
+    return (
+        '<?xml version="1.0" encoding="utf-8"?>\n'
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{RING_W:g}mm" height="{RING_H:g}mm" '
+        f'viewBox="0 0 {RING_W:g} {RING_H:g}">\n  <title>ring strip for pins and glue</title>\n'
+        f'  <rect x="0" y="0" width="{RING_W:g}" height="{RING_H:g}" fill="none" stroke="#000000"/>\n{paths}</svg>\n'
+    )
+
+
+def make_pins_picture(svg: Path, png: Path) -> None:
+    """Fold the ring strip with the add-on's operators, then glue and pin it with vertex groups and hook empties,
+    re-solve, and picture the pattern, the open fold and the held fold side by side."""
+    import bpy
+    import numpy as np
+
+    sys.path.insert(0, str(IMG))
+    import make_pictures
+
+    make_pictures.setup_addon()
+    from curved_fold.scene import mesh_object, pins
+
+    assert bpy.ops.curved_fold.import_pattern(filepath=str(svg)) == {"FINISHED"}
+    curves = list(bpy.context.selected_objects)
+    assert bpy.ops.curved_fold.fold(fold_percent=100.0) == {"FINISHED"}
+    ob = bpy.context.active_object
+    props = ob.curved_fold_mesh
+    for c in curves:
+        c.hide_render = True
+    ob.color = (0.93, 0.9, 0.82, 1)
+    open_figures = f"creases alone: open, {props.last_iterations} iterations"
+    flat = np.empty(2 * len(ob.data.vertices), np.float32)
+    ob.data.attributes["cf_flat"].data.foreach_get("vector", flat)
+    flat = flat.reshape(-1, 2).astype(np.float64)
+
+    def vertex(point) -> int:
+        return int(np.argmin(np.linalg.norm(flat - np.asarray(point, float), axis=1)))
+
+    glue = RING_CONSTRAINTS["glue"]
+    ob.vertex_groups.new(name="cf_glue_a").add([vertex(a) for a, _ in glue], 1.0, "REPLACE")
+    ob.vertex_groups.new(name="cf_glue_b").add([vertex(b) for _, b in glue], 1.0, "REPLACE")
+    pinned = {vertex(p["point"]): p["target"] for p in RING_CONSTRAINTS["pins"]}
+    ob.vertex_groups.new(name="cf_pins").add(list(pinned), 1.0, "REPLACE")
+    with tempfile.TemporaryDirectory() as tmp:
+        open_png, held_png = Path(tmp) / "open.png", Path(tmp) / "held.png"
+        bpy.context.view_layer.update()
+        make_pictures.camera_for([ob], direction=(0.35, -1.0, 0.6), margin=1.08)
+        make_pictures.render(open_png, "OBJECT", width=700, height=600)
+        assert bpy.ops.curved_fold.add_pin_hooks() == {"FINISHED"}
+        mm = mesh_object.mm_per_unit(bpy.context.scene)
+        for k, empty in pins.pin_hooks(ob).items():
+            empty.location = [c / mm for c in pinned[k]]  # drag each hook to its target
+        assert bpy.ops.curved_fold.refold(rebuild="RESOLVE") == {"FINISHED"}
+        bpy.data.objects.remove(bpy.context.scene.camera)
+        bpy.context.view_layer.update()
+        make_pictures.camera_for([ob], direction=(0.35, -1.0, 0.6), margin=1.08)
+        make_pictures.render(held_png, "OBJECT", width=700, height=600)
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.image as mpimg
+        import matplotlib.pyplot as plt
+
+        crossing = ob.get("cf_self_intersecting_faces", -1)
+        figures = (
+            f"glued + pinned: {props.last_iterations} iterations, {props.last_ms:.0f} ms"
+            + ("" if props.last_converged else " (NOT converged)")
+            + f", glue gap {ob['cf_glue_gap_mm']:.1e} mm, pins on target, strain {props.last_strain_mean:.2f} % "
+            f"mean / {props.last_strain_max:.2f} % max, self-intersecting faces {crossing}"
+        )
+        fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), gridspec_kw={"width_ratios": [1.3, 1, 1]})
+        _draw_pattern(axes[0], svg)
+        axes[0].set_title("ring strip: creases 40° (a closed ring needs 45°)", fontsize=11)
+        for ax, image, title in (
+            (axes[1], open_png, open_figures),
+            (axes[2], held_png, "ends glued, lower edge pinned 88 mm apart"),
+        ):
+            ax.imshow(mpimg.imread(image))
+            ax.axis("off")
+            ax.set_title(title, fontsize=11)
+        fig.suptitle(f"Pins and glue (out/{svg.name})\n{figures}", fontsize=10.5)
+        fig.subplots_adjust(left=0.01, right=0.99, bottom=0.02, top=0.82, wspace=0.04)
+        png.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(png, dpi=90, facecolor="white")
+    print(figures)
+    print(f"wrote {png}")
+
+
+def pins_glue_step(out: Path, img: Path, pictures: bool) -> bool:
+    """Write the ring strip and its constraints beside it, fold it with the command line, then picture it."""
+    from curved_fold.core.io.atomic import atomic_write_text
+
+    svg = out / "ring_glued.svg"
+    atomic_write_text(svg, ring_svg())
+    atomic_write_text(out / "ring_glued.constraints.json", json.dumps(RING_CONSTRAINTS, indent=1) + "\n")
+    args = ["fold", _show(svg), "--out", _show(out / "ring_glued.fold"), "--report", _show(out / "ring_glued.json")]
+    ok = run_step("python -m curved_fold " + " ".join(args), [sys.executable, "-m", "curved_fold", *args])
+    if ok and pictures:
+        png = img / "pins_glue.png"
+        label = f"python tools/demo.py --pins-picture {_show(svg)} {_show(png)}"
+        ok = run_step(label, [sys.executable, str(Path(__file__).resolve()), "--pins-picture", str(svg), str(png)])
+    return ok
+
+
 def picture_step(svg: Path, png: Path) -> bool:
     """Make the picture of one example in a fresh bpy process (the add-on registers once per process)."""
     label = f"python tools/demo.py --picture {_show(svg)} {_show(png)}"
@@ -171,9 +299,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--img", type=Path, default=IMG, help="folder for the pictures")
     parser.add_argument("--no-pictures", action="store_true", help="fold only, render nothing")
     parser.add_argument("--picture", nargs=2, type=Path, metavar=("SVG", "PNG"), help=argparse.SUPPRESS)
+    parser.add_argument("--pins-picture", nargs=2, type=Path, metavar=("SVG", "PNG"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.picture:
         make_picture(args.picture[0].resolve(), args.picture[1].resolve())
+        return 0
+    if args.pins_picture:
+        make_pins_picture(args.pins_picture[0].resolve(), args.pins_picture[1].resolve())
         return 0
     svgs = sorted(args.examples.resolve().glob("*.svg"))
     if not svgs:
@@ -194,6 +326,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"    ({'expected: this pattern cannot fold' if expected else 'UNEXPECTED'}: see the warning above)")
         if not args.no_pictures and not picture_step(svg, args.img.resolve() / f"example_{svg.stem}.png"):
             failed.append(f"picture {svg.name}")
+    print("== pins and glue ==", flush=True)
+    if not pins_glue_step(out, args.img.resolve(), not args.no_pictures):
+        failed.append("pins and glue")
     if not args.no_pictures:
         print("== operator pictures ==", flush=True)
         if not operator_pictures():

@@ -27,7 +27,7 @@ import numpy as np
 from ..mesh.fold_mesh import FoldMesh
 from ..pattern.model import PatternError
 
-GLUE_STIFFNESS = 1e5
+GLUE_STIFFNESS = 1e6
 """Stiffness of a glue bar in the normalised model (sheet in a unit sphere; a crease is about 1 per unit length). The
 gap left is the force holding the pair apart divided by this. Measured on an eight-panel strip rolled shut against
 creases 5° short of closing: 1e5 leaves 5e-8 of the diagonal in 23 Newton iterations (1e4: 5e-7, 20; 1e6: 5e-9, 34;

@@ -21,7 +21,8 @@ reduces the residual force instead.
 Pinned nodes (``fixed``, a boolean mask of degrees of freedom, ``core.solve.constraints``) are fixed degrees of
 freedom, not stiff springs: their force is left out of the right-hand side and the residual, their step is zero
 (CG runs on the free subspace), and the factorised preconditioner gets a large diagonal there so it decouples them.
-The free block is solved exactly as without pins, so convergence stays quadratic.
+The free block is solved exactly as without pins, so pins do not change the order of convergence (quadratic with an
+exact Hessian; with the Gauss–Newton one, a pin that turns a rigid motion into a soft pivot slows the tail).
 """
 
 from __future__ import annotations

@@ -34,4 +34,51 @@ class CURVED_FOLD_OT_add_pin_hooks(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (CURVED_FOLD_OT_add_pin_hooks,)
+class CURVED_FOLD_OT_glue_selected(bpy.types.Operator):
+    """Glue the two selected vertices of the folded mesh together (a zero-length bar on every re-solve)"""
+
+    bl_idname = "curved_fold.glue_selected"
+    bl_label = "Glue Selected"
+    bl_description = (
+        "Glue the two vertices selected in Edit Mode: every re-solve pulls them together with a zero-length bar "
+        "(Last Run shows the gap left)"
+    )
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if context.mode != "EDIT_MESH":
+            cls.poll_message_set("Select the two vertices to glue in Edit Mode")
+            return False
+        return _common.poll_fold_object(cls, context, object_mode=False)
+
+    def execute(self, context):
+        import bmesh
+
+        ob = context.active_object
+        selected = [v.index for v in bmesh.from_edit_mesh(ob.data).verts if v.select]
+        if len(selected) != 2:
+            self.report({"ERROR"}, f"select exactly two vertices to glue ({len(selected)} selected)")
+            return {"CANCELLED"}
+        count = pins.add_glue_pair(ob, *selected)
+        self.report({"INFO"}, f"'{ob.name}': vertices {selected[0]} and {selected[1]} glued ({count} picked pairs)")
+        return {"FINISHED"}
+
+
+class CURVED_FOLD_OT_clear_glue(bpy.types.Operator):
+    """Forget the glue pairs picked with Glue Selected (the cf_glue_a/cf_glue_b vertex groups stay)"""
+
+    bl_idname = "curved_fold.clear_glue"
+    bl_label = "Clear Picked Glue"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return _common.poll_fold_object(cls, context, object_mode=False)
+
+    def execute(self, context):
+        context.active_object.pop(pins.PAIRS_KEY, None)
+        return {"FINISHED"}
+
+
+CLASSES = (CURVED_FOLD_OT_add_pin_hooks, CURVED_FOLD_OT_glue_selected, CURVED_FOLD_OT_clear_glue)

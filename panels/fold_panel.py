@@ -168,7 +168,10 @@ class VIEW3D_PT_curved_fold_figures(SidebarPanel, bpy.types.Panel):
         row.operator("curved_fold.show_colours", text="Warp").kind = "WARP"
         row.operator("curved_fold.show_colours", text="Crossing").kind = "CROSSING"
         row.operator("curved_fold.show_colours", text="", icon="MATERIAL").kind = "NONE"
-        self.layout.operator("curved_fold.add_pin_hooks", icon="EMPTY_AXIS")
+        row = self.layout.row(align=True)
+        row.operator("curved_fold.add_pin_hooks", icon="EMPTY_AXIS")
+        row.operator("curved_fold.glue_selected", icon="AUTOMERGE_ON")
+        row.operator("curved_fold.clear_glue", text="", icon="X")
 
 
 CLASSES = (

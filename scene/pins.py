@@ -7,7 +7,8 @@
   by ``scene.live``);
 * ``cf_glue_a`` / ``cf_glue_b`` vertex groups: glued pairs, the k-th vertex of one to the k-th of the other, each
   group ordered along its own longest flat extent (two edges of the sheet glue end to end, a single vertex to a
-  single vertex).
+  single vertex);
+* ``ob["cf_glue_pairs"]``: pairs picked in the viewport (:func:`add_glue_pair`, the Glue Selected operator).
 
 Pins and glue act when the stored mesh is re-solved (fold percent, Re-fold → Re-solve, hooks); rebuilding the mesh
 from the curves makes new vertices and leaves the groups behind.
@@ -28,6 +29,23 @@ PIN_GROUP = "cf_pins"
 GLUE_GROUPS = ("cf_glue_a", "cf_glue_b")
 HOOK_VERTEX = "cf_pin_vertex"
 GAP_KEY = "cf_glue_gap_mm"
+PAIRS_KEY = "cf_glue_pairs"
+
+
+def glue_pairs(ob: bpy.types.Object) -> np.ndarray:
+    """The picked glue pairs of ``ob`` ``(g, 2)`` (stored flat as ``[a0, b0, a1, b1, ...]``)."""
+    return np.array(list(ob.get(PAIRS_KEY, [])), dtype=np.int64).reshape(-1, 2)
+
+
+def add_glue_pair(ob: bpy.types.Object, a: int, b: int) -> int:
+    """Glue vertices ``a`` and ``b`` of ``ob`` (kept on the object); returns the number of picked pairs."""
+    if a == b:
+        raise PatternError("pick two different vertices to glue")
+    pairs = glue_pairs(ob).tolist()
+    if [a, b] not in pairs and [b, a] not in pairs:
+        pairs.append([int(a), int(b)])
+    ob[PAIRS_KEY] = [int(v) for pair in pairs for v in pair]
+    return len(pairs)
 
 
 def group_vertices(ob: bpy.types.Object, name: str) -> np.ndarray:
@@ -83,6 +101,7 @@ def constraints_from_object(
             "the same number of vertices (the k-th of one is glued to the k-th of the other)"
         )
     glue = np.column_stack([_along(mesh.vertices, a), _along(mesh.vertices, b)]) if len(a) else np.zeros((0, 2))
+    glue = np.concatenate([np.asarray(glue, dtype=np.int64).reshape(-1, 2), glue_pairs(ob)])
     held = Constraints(pins, targets, glue)
     if held.empty:
         return None

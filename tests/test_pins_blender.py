@@ -86,3 +86,28 @@ def test_pin_group_and_hook_empties(strip, extension):
     target = np.array(hooks[corner].location) * mm
     assert np.linalg.norm(pins.current_positions(ob)[corner] - target) <= 1e-3
     ob.curved_fold_mesh.live = False
+
+
+def test_glue_selected_pair_in_edit_mode(view3d, strip, extension):
+    ob = strip
+    pins = _mod(extension, "scene.pins")
+    flat = _flat(ob)
+    a, b = _nearest(flat, 0.0, 0.0), _nearest(flat, STRIP_W, 0.0)
+    import bmesh
+
+    with bpy.context.temp_override(**view3d):
+        bpy.ops.object.mode_set(mode="EDIT")
+        bm = bmesh.from_edit_mesh(ob.data)
+        for element in (*bm.faces, *bm.edges, *bm.verts):
+            element.select = False
+        bm.verts.ensure_lookup_table()
+        bm.verts[a].select = True
+        bm.verts[b].select = True
+        bmesh.update_edit_mesh(ob.data)
+        assert bpy.ops.curved_fold.glue_selected() == {"FINISHED"}
+        bpy.ops.object.mode_set(mode="OBJECT")
+    assert pins.glue_pairs(ob).tolist() == [[min(a, b), max(a, b)]]
+    assert bpy.ops.curved_fold.refold(rebuild="RESOLVE") == {"FINISHED"}
+    after = pins.current_positions(ob)
+    assert np.linalg.norm(after[a] - after[b]) <= 1e-5 * float(np.hypot(STRIP_W, STRIP_H))
+    assert bpy.ops.curved_fold.clear_glue() == {"FINISHED"} and len(pins.glue_pairs(ob)) == 0

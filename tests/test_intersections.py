@@ -153,3 +153,14 @@ def test_cli_prints_and_writes_the_count(tmp_path, capsys):
     count = json.loads(report.read_text())["self_intersecting_faces"]
     assert count > 0
     assert f"self-intersection: {count} faces" in capsys.readouterr().out
+
+
+def test_chunked_broad_phase_finds_the_same_pairs(monkeypatch):
+    """Crowded cells are processed in bounded chunks (memory of stacked layers); the pairs do not depend on it."""
+    from curved_fold.core.metrics import intersections
+
+    x, tris = _rolled_sheet(20, 1.6)
+    x[:, :2] *= np.where(np.repeat(np.linspace(0, 1, 21), 21) > 0.91, 1.4, 1.0)[:, None]
+    whole = intersecting_pairs(x, tris)
+    monkeypatch.setattr(intersections, "CHUNK_PAIRS", 7)
+    assert len(whole) and np.array_equal(intersecting_pairs(x, tris), whole)

@@ -21,6 +21,8 @@ bounding-box diagonal.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 
 REL_TOLERANCE = 1e-6
@@ -32,6 +34,9 @@ CELL_FACTORS = (1.0, 2.0, 4.0, 8.0, 16.0)
 CELL_ENTRIES_PER_TRIANGLE = 4
 """The first cell size that enters triangles in at most this many cells on average is used."""
 
+CHUNK_PAIRS = 2_000_000
+"""Raw same-cell pairs handled at once (bounds the memory of heavily layered folds)."""
+
 
 def _cells(lo: np.ndarray, hi: np.ndarray, origin: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
     """First and last grid cell index ``(t, 3)`` covered by each box at cell size ``h``."""
@@ -40,9 +45,16 @@ def _cells(lo: np.ndarray, hi: np.ndarray, origin: np.ndarray, h: float) -> tupl
 
 def _pairs_in_cells(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Candidate pairs ``(k, 2)`` (``i < j``, unique) of triangles whose boxes ``lo``/``hi`` ``(t, 3)`` overlap."""
+    chunks = list(_candidate_chunks(lo, hi))
+    return np.concatenate(chunks) if chunks else np.zeros((0, 2), dtype=np.int64)
+
+
+def _candidate_chunks(lo: np.ndarray, hi: np.ndarray) -> Iterator[np.ndarray]:
+    """:func:`_pairs_in_cells` in chunks of at most about :data:`CHUNK_PAIRS` raw pairs each, so memory stays bounded
+    when many triangles share cells (the stacked layers of a flat fold overlap pairwise)."""
     t = len(lo)
     if t < 2:
-        return np.zeros((0, 2), dtype=np.int64)
+        return
     origin = lo.min(axis=0)
     size = float(np.median(np.max(hi - lo, axis=1)))
     if not size > 0:
@@ -71,24 +83,31 @@ def _pairs_in_cells(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     group_end = np.repeat(starts + sizes, sizes)
     position = np.arange(len(tri))
     partners = group_end - position - 1
-    total = int(partners.sum())
-    if total == 0:
-        return np.zeros((0, 2), dtype=np.int64)
-    first = np.repeat(position, partners)
-    second = first + 1 + np.arange(total) - np.repeat(np.cumsum(partners) - partners, partners)
-    a, b = tri[first], tri[second]
     # a pair whose boxes share several cells is kept once: in the cell holding the low corner of the boxes' overlap
     # (floor is monotonic, so that cell is the componentwise max of the boxes' first cells). Gathers are done per
     # coordinate column: numpy gathers 1-D arrays several times faster than rows of a 2-D one.
     cx, cy, cz = (np.ascontiguousarray(c0[:, k]) for k in range(3))
-    ref = (np.maximum(cx[a], cx[b]) * dims[1] + np.maximum(cy[a], cy[b])) * dims[2] + np.maximum(cz[a], cz[b])
-    once = ref == key[first]
-    a, b = a[once], b[once]
-    for k in range(3):
-        lk, hk = np.ascontiguousarray(lo[:, k]), np.ascontiguousarray(hi[:, k])
-        overlap = (lk[a] <= hk[b]) & (lk[b] <= hk[a])
-        a, b = a[overlap], b[overlap]
-    return np.column_stack([np.minimum(a, b), np.maximum(a, b)])
+    los = [np.ascontiguousarray(lo[:, k]) for k in range(3)]
+    his = [np.ascontiguousarray(hi[:, k]) for k in range(3)]
+    ends = np.cumsum(partners)
+    begin = 0
+    while begin < len(position):
+        stop = int(np.searchsorted(ends, (ends[begin - 1] if begin else 0) + CHUNK_PAIRS, side="right"))
+        stop = max(stop, begin + 1)
+        part = partners[begin:stop]
+        total = int(part.sum())
+        if total:
+            first = np.repeat(position[begin:stop], part)
+            second = first + 1 + np.arange(total) - np.repeat(np.cumsum(part) - part, part)
+            a, b = tri[first], tri[second]
+            ref = (np.maximum(cx[a], cx[b]) * dims[1] + np.maximum(cy[a], cy[b])) * dims[2] + np.maximum(cz[a], cz[b])
+            once = ref == key[first]
+            a, b = a[once], b[once]
+            for k in range(3):
+                overlap = (los[k][a] <= his[k][b]) & (los[k][b] <= his[k][a])
+                a, b = a[overlap], b[overlap]
+            yield np.column_stack([np.minimum(a, b), np.maximum(a, b)])
+        begin = stop
 
 
 def _interval(d: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -191,21 +210,21 @@ def intersecting_pairs(positions: np.ndarray, triangles: np.ndarray) -> np.ndarr
         raise ValueError("positions must be finite to test for self-intersection")
     diagonal = float(np.linalg.norm(corners.max(axis=(0, 1)) - corners.min(axis=(0, 1))))
     tol = REL_TOLERANCE * diagonal
-    pairs = _pairs_in_cells(corners.min(axis=1) - tol, corners.max(axis=1) + tol)
-    if len(pairs) == 0:
-        return pairs
     normals, flat = _unit_normals(corners)
     cols = _Columns(x, tris, normals)
-    a, b = pairs[:, 0], pairs[:, 1]
-    # staged: most candidates (neighbours, pairs a plane separates) leave after the cheap tests
-    keep = ~cols.neighbours(a, b) & flat[a] & flat[b]
-    a, b = a[keep], b[keep]
-    keep = cols.straddles(a, b, tol)
-    a, b = a[keep], b[keep]
-    keep = cols.straddles(b, a, tol)
-    a, b = a[keep], b[keep]
-    keep = _crossing(x, tris[a], tris[b], normals[a], normals[b], tol)
-    return np.column_stack([a[keep], b[keep]])
+    found = [np.zeros((0, 2), dtype=np.int64)]
+    for pairs in _candidate_chunks(corners.min(axis=1) - tol, corners.max(axis=1) + tol):
+        a, b = pairs[:, 0], pairs[:, 1]
+        # staged: most candidates (neighbours, pairs a plane separates) leave after the cheap tests
+        keep = ~cols.neighbours(a, b) & flat[a] & flat[b]
+        a, b = a[keep], b[keep]
+        keep = cols.straddles(a, b, tol)
+        a, b = a[keep], b[keep]
+        keep = cols.straddles(b, a, tol)
+        a, b = a[keep], b[keep]
+        keep = _crossing(x, tris[a], tris[b], normals[a], normals[b], tol)
+        found.append(np.column_stack([a[keep], b[keep]]))
+    return np.concatenate(found)
 
 
 def intersecting_faces(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:

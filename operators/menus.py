@@ -11,7 +11,7 @@ import bpy
 
 
 class VIEW3D_MT_curved_fold(bpy.types.Menu):
-    """Curved Fold: import, crease roles, fold, live re-fold, bake, colors and export"""
+    """Curved Fold: import, crease roles, fold, live re-fold, pins and glue, bake, colors and export"""
 
     bl_idname = "VIEW3D_MT_curved_fold"
     bl_label = "Curved Fold"
@@ -26,6 +26,10 @@ class VIEW3D_MT_curved_fold(bpy.types.Menu):
         layout.operator("curved_fold.fold", icon="MOD_SIMPLEDEFORM")
         layout.operator("curved_fold.refold", icon="FILE_REFRESH")
         layout.operator("curved_fold.toggle_live", icon="REC")
+        layout.separator()
+        layout.operator("curved_fold.add_pin_hooks", icon="EMPTY_AXIS")
+        layout.operator("curved_fold.glue_selected", icon="AUTOMERGE_ON")
+        layout.operator("curved_fold.clear_glue", icon="X")
         layout.separator()
         layout.operator("curved_fold.bake", icon="RENDER_ANIMATION")
         layout.operator("curved_fold.clear_bake", icon="X")

@@ -711,7 +711,7 @@ def main(argv: list[str] | None = None) -> int:
     print("== 3. scaling", flush=True)
     budget.start("scaling")
     sizes = scaling_mod.SIZES[:2] if args.quick else scaling_mod.SIZES
-    sc = scaling_mod.run_scaling(shares["scaling"], sizes=sizes)
+    sc = scaling_mod.run_scaling(shares["scaling"], sizes=sizes, always=len(sizes) if args.quick else 1)
     budget.stop("scaling")
 
     images: list[str] = []

@@ -81,9 +81,10 @@ def measure_size(n: int, interval: float, *, fast_seconds: float = 90.0, faithfu
     return row
 
 
-def run_scaling(budget_s: float, sizes=SIZES, echo: bool = True) -> dict[str, Any]:
+def run_scaling(budget_s: float, sizes=SIZES, echo: bool = True, always: int = 1) -> dict[str, Any]:
     """Measure the sizes in increasing order; a size is skipped (and reported) when the time left is less than the
-    previous size took × its face ratio (the cost grows about linearly or faster)."""
+    previous size took × its face ratio (the cost grows about linearly or faster). The first ``always`` sizes are
+    measured whatever the budget (the quick smoke run needs two points for a fit, also on a busy machine)."""
     rows: list[dict[str, Any]] = []
     skipped: list[str] = []
     t_start = time.perf_counter()
@@ -91,7 +92,7 @@ def run_scaling(budget_s: float, sizes=SIZES, echo: bool = True) -> dict[str, An
     for n, interval in sizes:
         left = budget_s - (time.perf_counter() - t_start)
         expected_faces = 2.0 * (n + 4) * 100.0 / interval
-        if rows and last_s * expected_faces / max(last_faces, 1) > left:
+        if len(rows) >= always and last_s * expected_faces / max(last_faces, 1) > left:
             skipped.append(f"{n} pleats at {interval} mm (~{expected_faces:.0f} faces): budget left {left:.0f} s")
             continue
         t0 = time.perf_counter()

@@ -6,6 +6,9 @@ The faithful run is capped (seconds) and reports the residual it reached where c
 table and written into the generated section of ``docs/solver.md``.
 
 Run: ``.venv/bin/python -m curved_fold.benchmarks.solvers [--quick] [--no-write]`` (or as a script).
+``--tail`` instead compares the solver with and without its tail, saddle handling and continuation (issue 12):
+:func:`run_tail_case` per fixture and example at 60 % and 100 %, plus :func:`run_frames` (per-frame CPU), written into
+its own generated section of ``docs/solver.md``.
 Functions for other tools (``make bench``): :func:`run_case`, :func:`run_all`, :func:`format_table`,
 :func:`write_docs`.
 """
@@ -36,6 +39,8 @@ FIXTURES = REPO / "tests" / "fixtures" / "origami-simulator"
 EXAMPLES = REPO / "examples"
 DOC = REPO / "docs" / "solver.md"
 BEGIN, END = "<!-- BEGIN GENERATED: benchmarks/solvers.py -->", "<!-- END GENERATED: benchmarks/solvers.py -->"
+TAIL_BEGIN = "<!-- BEGIN GENERATED: benchmarks/solvers.py --tail -->"
+TAIL_END = "<!-- END GENERATED: benchmarks/solvers.py --tail -->"
 
 BIG = ("shell14.svg", "CircularPleat-antiFacet.svg", "huffmanTower.svg", "Rotating_Star.svg", "Carved_Cylinder.svg")
 """Fixtures where the faithful model would run for minutes: capped shorter in the benchmark."""
@@ -182,6 +187,131 @@ def run_frames(cells: int = 32, frames: int = 60) -> dict[str, Any]:
     }
 
 
+def run_tail_case(path: Path, percent: float) -> dict[str, Any]:
+    """One pattern at ``percent``: the previous solver (Gauss–Newton only, one solve from the flat sheet:
+    ``exact_tail=False, continuation=False``) beside the current one (exact tail, saddle escapes, continuation), with
+    CPU seconds (``time.process_time``), iterations, residual, energy, the current run's exact iterations, saddle
+    escapes and negative pivots at the end, and the RMS/diagonal between the static fold and the last frame of a
+    0 → percent animation in 7 frames."""
+    from curved_fold.core.solve.animation import FoldAnimation
+
+    mesh = build_mesh(read_pattern(path), mesh_type="ruling")
+    row: dict[str, Any] = {"case": path.name, "percent": percent, "faces": int(mesh.n_faces)}
+    for key, settings, continuation in (
+        ("old", SolverSettings(exact_tail=False), False),
+        ("new", SolverSettings(), True),
+    ):
+        c0 = time.process_time()
+        r = Solver(mesh, settings).solve(percent, continuation=continuation)
+        row[f"{key}_cpu_s"] = time.process_time() - c0
+        row[f"{key}_it"] = r.iterations
+        row[f"{key}_res"] = r.residual
+        row[f"{key}_conv"] = r.converged
+        row[f"{key}_energy"] = r.energy
+        if key == "new":
+            row.update(exact=r.exact_iterations, saddles=r.saddle_escapes, neg=r.negative_pivots)
+            static = r.positions
+    anim = FoldAnimation(mesh, SolverSettings())
+    for k in range(1, 8):
+        last = anim.frame(percent * k / 7)
+    row["anim_rms_diag"] = rigid_rms(static, last.positions) / mesh.diagonal
+    return row
+
+
+TAIL_COLUMNS = (
+    ("case", "case", "s"),
+    ("%", "percent", "%"),
+    ("faces", "faces", "d"),
+    ("old it", "old_it", "d"),
+    ("old CPU s", "old_cpu_s", ".2f"),
+    ("old res", "old_res", ".1e"),
+    ("old E", "old_energy", ".6g"),
+    ("new it", "new_it", "d"),
+    ("exact it", "exact", "d"),
+    ("saddle steps", "saddles", "d"),
+    ("new CPU s", "new_cpu_s", ".2f"),
+    ("new res", "new_res", ".1e"),
+    ("new E", "new_energy", ".6g"),
+    ("neg. pivots", "neg", "d"),
+    ("static vs anim RMS/diag", "anim_rms_diag", ".1e"),
+)
+
+
+def format_tail_table(rows: list[dict[str, Any]], header: bool = True) -> str:
+    """Markdown table of :func:`run_tail_case` rows."""
+    out = []
+    if header:
+        out.append("| " + " | ".join(c[0] for c in TAIL_COLUMNS) + " |")
+        out.append("|" + "---|" * len(TAIL_COLUMNS))
+    for row in rows:
+        if "error" in row:
+            out.append(f"| {row['case']} | {row['percent']:.0%} | error: {row['error']} |")
+            continue
+        cells = []
+        for _, key, spec in TAIL_COLUMNS:
+            v = row.get(key)
+            cells.append(f"{v:.0%}" if spec == "%" else _fmt(v, spec))
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def run_tail(quick: bool = False) -> tuple[list[dict[str, Any]], list[str]]:
+    """:func:`run_tail_case` over every fixture and example at 60 % and 100 %, and the per-frame benchmark."""
+    rows = []
+    paths = sorted(FIXTURES.glob("*.svg")) + sorted(EXAMPLES.glob("*.svg"))
+    if quick:
+        paths = [p for p in paths if p.name not in BIG + ("Treble_Clef.svg",)]
+    for path in paths:
+        for percent in (0.6, 1.0):
+            try:
+                row = run_tail_case(path, percent)
+            except Exception as exc:  # a failing case is reported, not hidden
+                row = {"case": path.name, "percent": percent, "error": f"{type(exc).__name__}: {exc}"}
+            rows.append(row)
+            print(format_tail_table([row], header=len(rows) == 1), flush=True)
+    ok = [r for r in rows if "error" not in r]
+    frames = run_frames(cells=32, frames=60)
+    lines = [
+        f"- converged: previous {sum(r['old_conv'] for r in ok)}/{len(rows)}, current {sum(r['new_conv'] for r in ok)}"
+        f"/{len(rows)}; CPU total previous {sum(r['old_cpu_s'] for r in ok):.1f} s, current "
+        f"{sum(r['new_cpu_s'] for r in ok):.1f} s",
+        f"- static fold vs last animation frame: max RMS/diag {max((r['anim_rms_diag'] for r in ok), default=0):.1e}",
+        f"- runs that stepped out of a saddle: {sum(1 for r in ok if r['saddles'])}; runs using the exact tail: "
+        f"{sum(1 for r in ok if r['exact'])}/{len(ok)}",
+        f"- quasi-static animation, {frames['faces']} faces, percent +1/{frames['frames']} per frame: median "
+        f"{frames['median_cpu_ms']:.0f} ms CPU per frame ({frames['median_ms']:.0f} ms wall), "
+        f"{frames['median_iterations']:.0f} Newton iterations, {frames['factorisations']} factorisations in "
+        f"{frames['frames']} frames, all converged: {frames['all_converged']}",
+    ]
+    return rows, lines
+
+
+def write_tail_docs(rows: list[dict[str, Any]], lines: list[str], path: Path = DOC) -> None:
+    """Replace the ``--tail`` generated section of ``docs/solver.md`` (appended if its markers are absent)."""
+    body = "\n".join(
+        [
+            TAIL_BEGIN,
+            f"Generated by `benchmarks/solvers.py --tail` on {time.strftime('%Y-%m-%d %H:%M')}. "
+            f"Machine: {machine_line()}.",
+            "Ruling mesh, tolerance 1e-6. *old* = the previous solver (Gauss–Newton only, one solve from the flat "
+            "sheet); *new* = exact tail + saddle escapes + continuation. CPU seconds by `time.process_time`.",
+            "",
+            format_tail_table(rows),
+            "",
+            *lines,
+            TAIL_END,
+        ]
+    )
+    text = path.read_text() if path.exists() else ""
+    if TAIL_BEGIN in text and TAIL_END in text:
+        text = text[: text.index(TAIL_BEGIN)] + body + text[text.index(TAIL_END) + len(TAIL_END) :]
+    else:
+        text = text.rstrip() + "\n\n" + body + "\n"
+    from curved_fold.core.io.atomic import atomic_write_text
+
+    atomic_write_text(path, text)
+
+
 def run_all(quick: bool = False, echo: bool = True) -> list[dict[str, Any]]:
     """Run :func:`run_case` over :func:`cases`; rows print as they finish when ``echo``."""
     rows = []
@@ -316,8 +446,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="small fixtures only")
     parser.add_argument("--no-write", action="store_true", help="do not update docs/solver.md")
     parser.add_argument("--json", default=None, help="also write the rows and summary lines as JSON here")
+    parser.add_argument("--tail", action="store_true", help="previous vs current solver (tail, saddles, continuation)")
     args = parser.parse_args(argv)
     print(machine_line())
+    if args.tail:
+        rows, lines = run_tail(args.quick)
+        print("\n".join(lines))
+        if not args.no_write:
+            write_tail_docs(rows, lines)
+            print(f"wrote {DOC}")
+        return 0
     rows = run_all(args.quick)
     frames = run_frames()
     lines = summary_lines(rows) + [

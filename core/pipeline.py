@@ -67,6 +67,26 @@ def self_intersecting_faces(mesh: FoldMesh, positions: np.ndarray) -> int | None
     return count_intersecting_faces(positions, mesh.triangles) if np.all(np.isfinite(positions)) else None
 
 
+def state_report(result: FoldResult) -> dict[str, Any]:
+    """Which equilibrium was reached: its energy, whether it is a stable minimum (no negative pivot of the exact
+    Hessian), and where along the folding path another state branches off (a saddle the solver stepped out of)."""
+    n = result.negative_pivots
+    if n is None:
+        state = "not measured"
+    elif n == 0:
+        state = f"stable minimum (energy {result.energy:.6g})"
+    else:
+        state = f"saddle with {n} negative curvature direction{'s' if n > 1 else ''} (energy {result.energy:.6g})"
+    out: dict[str, Any] = {"state": state, "negative_pivots": n}
+    if result.saddle_percents:
+        where = ", ".join(f"{100 * p:.0f} %" for p in result.saddle_percents)
+        out["other_state_near"] = (
+            f"the folding path passed a saddle near {where}: another equilibrium branches off there "
+            "(the fold followed the lower side)"
+        )
+    return out
+
+
 def make_report(
     mesh: FoldMesh,
     result: FoldResult,
@@ -97,6 +117,10 @@ def make_report(
         "energy": float(result.energy),
         "message": result.message,
         "warnings": list(warnings),
+        "exact_iterations": int(result.exact_iterations),
+        "saddle_escapes": int(result.saddle_escapes),
+        "continuation_steps": int(result.continuation_steps),
+        **state_report(result),
     }
     # metrics.summary also reports mesh counts (as floats): keep the report's own integer counts
     report.update({k: v for k, v in measure(mesh, result, percent).items() if k not in report})
@@ -128,8 +152,9 @@ def refold_mesh(
     start: np.ndarray | None = None,
     constraints: Constraints | None = None,
 ) -> FoldRun:
-    """Fold an already built mesh at ``percent`` (warm-started from ``start``, positions in mm, if given), with
-    ``constraints`` (pins and glue on its vertices) if given."""
+    """Fold an already built mesh at ``percent``: warm-started from ``start`` (positions in mm) if given, otherwise
+    by continuation from the flat sheet (as :func:`fold_pattern`); with ``constraints`` (pins and glue on its
+    vertices) if given."""
     result = Solver(mesh, settings, solver, constraints).solve(percent, start=start)
     report = make_report(
         mesh,
@@ -156,6 +181,9 @@ def fold_pattern(
     constraints: ConstraintSpec | None = None,
 ) -> FoldRun:
     """Triangulate ``pattern`` and fold it to equilibrium at ``percent`` (1.0 = 100 %).
+
+    The fast solvers fold along the path paper takes: continuation in the fold percent from the flat sheet
+    (``Solver.fold_steps``), so the state reached is the last frame of a 0 → ``percent`` animation, deterministic.
 
     ``angle`` (degrees) is the target of every M/V crease without one (valley +, mountain −). ``constraints`` (pins
     and glue named by flat points of the pattern) are mapped onto the mesh's vertices.

@@ -81,6 +81,8 @@ def test_pipeline_on_fixture_reports_metrics_and_converges(name):
         assert np.isfinite(r[key]), key
     assert 0 <= r["strain_mean_pct"] < 5.0
     assert not r["does_not_fold_as_assigned"]
+    assert r["continuation_steps"] >= 2 and r["negative_pivots"] == 0
+    assert r["state"].startswith("stable minimum") and f"{r['energy']:.6g}" in r["state"]
     crease = run.mesh.is_crease()
     assert np.nanmax(np.abs(run.result.fold_angles[crease])) > 60  # 60 % of 180° creases: clearly folded
 
@@ -109,3 +111,60 @@ def test_warm_start_from_positions_alone_keeps_a_crease_folded_past_flat():
     again = refold_mesh(mesh, 1.0, start=first.positions)
     assert again.result.iterations <= 1
     assert rigid_rms(again.result.positions, first.positions) < 1e-6 * mesh.diagonal
+
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+PATTERNS = sorted(FIXTURES.glob("*.svg")) + sorted(EXAMPLES.glob("*.svg"))
+BIG = {"CircularPleat-antiFacet.svg", "Carved_Cylinder.svg", "Treble_Clef.svg", "shell14.svg", "huffmanTower.svg"}
+
+
+KNOWN_APART = {("CircularPleat-antiFacet.svg", 0.6)}
+"""The static fold leaves the saddle this symmetric pleat passes at 20 % (E 0.600611, a minimum); the animation's
+frames skip the minimum check and stay on the symmetric branch (E 0.600623). Not solved yet (docs/solver.md)."""
+
+
+def _cases():
+    for p in PATTERNS:
+        for percent in (0.6, 1.0):
+            yield pytest.param(p, percent, marks=[pytest.mark.slow] if p.name in BIG else [], id=f"{p.name}-{percent}")
+
+
+@pytest.mark.parametrize(("path", "percent"), list(_cases()))
+def test_static_fold_converges_and_equals_the_last_animation_frame(path, percent):
+    """Every fixture and example: the static fold (continuation from the flat sheet) converges to residual ≤ 1e-6,
+    to a minimum, and is the equilibrium of the last frame of a 0 → percent quasi-static animation in other steps
+    (RMS/diagonal ≤ 1e-4)."""
+    from curved_fold.core.io.reader import read_pattern
+    from curved_fold.core.mesh.build import build_mesh
+    from curved_fold.core.solve.animation import FoldAnimation
+
+    mesh = build_mesh(read_pattern(path), mesh_type="ruling")
+    static = Solver(mesh, SolverSettings()).solve(percent)
+    assert static.converged and static.residual <= 1e-6, static.message
+    assert static.continuation_steps >= 2 and static.negative_pivots == 0
+    if (path.name, percent) in KNOWN_APART:
+        pytest.xfail("static fold and animation end in different states here (KNOWN_APART)")
+    anim = FoldAnimation(mesh, SolverSettings())
+    frames = 5
+    for k in range(1, frames + 1):
+        last = anim.frame(percent * k / frames)
+    assert last.converged and last.residual <= 1e-6
+    # the same equilibrium? Compared once both are polished to 1e-10: in a soft valley (Treble_Clef at 100 %) two
+    # states at residual 1e-6 of one minimum can still lie 2e-4 of the diagonal apart
+    polish = Solver(mesh, SolverSettings(tolerance=1e-10))
+    a = polish.solve(percent, start=static.positions, theta_prev=static.theta)
+    b = polish.solve(percent, start=last.positions, theta_prev=anim.theta)
+    assert a.converged and b.converged
+    assert rigid_rms(a.positions, b.positions) / mesh.diagonal <= 1e-4
+    assert rigid_rms(static.positions, a.positions) / mesh.diagonal <= 1e-3  # polishing moved it little
+
+
+def test_static_fold_is_deterministic_whatever_the_solver_did_before():
+    """A static fold does not depend on the solver's history (cached damping and preconditioner are reset)."""
+    mesh = fixture_mesh("curvedPleatSimple.svg")
+    solver = Solver(mesh, SolverSettings())
+    first = solver.solve(1.0)
+    solver.solve(0.3, start=first.positions, theta_prev=first.theta)  # leaves a different λ and factorisation
+    again = solver.solve(1.0)
+    assert np.array_equal(first.positions, again.positions)
+    assert first.energy == again.energy

@@ -25,6 +25,12 @@ from .model import BarHingeModel
 HINGE_EPS = 1e-6
 FACE_EPS = 1e-7
 
+FACE_SMOOTH = np.radians(1.0)
+"""Width (rad) of the smooth cap of the face-angle energy at 0° and 180° (see :func:`face_angle_energy`)."""
+
+COMPLEX_STEP = 1e-30
+"""Imaginary step of the complex-step differentiation of the element gradients (exact to round-off)."""
+
 
 @dataclass
 class Evaluation:
@@ -41,6 +47,9 @@ class Evaluation:
     hinge_grad: np.ndarray | None = None
     hinge_k: np.ndarray | None = None
     face_grad: np.ndarray | None = None
+    hinge_dev: np.ndarray | None = None
+    face_dphi: np.ndarray | None = None
+    face_ddphi: np.ndarray | None = None
 
 
 def _rows_dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -158,6 +167,7 @@ def evaluate(
             if jacobians:
                 out.hinge_grad = np.stack([g1, g2, g3, g4], axis=1)
                 out.hinge_k = k
+                out.hinge_dev = dev
 
     # --- face-angle springs -----------------------------------------------------------------------------------
     if model.face_k > 0:
@@ -175,8 +185,10 @@ def evaluate(
             ],
             axis=1,
         )
-        dev = np.where(ok[:, None], alpha - model.face_alpha0, 0.0)
-        energy += 0.5 * model.face_k * float(np.sum(dev * dev))
+        phi, dphi, ddphi = face_angle_energy(alpha, model.face_alpha0, model.face_k)
+        energy += float(np.sum(phi[ok]))
+        # dev · k_f is the energy's slope dφ/dα (= k_f (α − α0) away from the caps)
+        dev = np.where(ok[:, None], dphi / model.face_k, 0.0)
         if forces or jacobians:
             nrm = normals if normals is not None else triangle_normals(x, tri)
             P_ab = _cross(nrm, e_ab) / np.where(ok, l_ab, 1.0)[:, None]
@@ -207,6 +219,8 @@ def evaluate(
                     idx_parts += [tri[:, 0], tri[:, 1], tri[:, 2]]
                     val_parts += [f[:, 0], f[:, 1], f[:, 2]]
                 out.face_grad = grad
+                out.face_dphi = np.where(ok[:, None], dphi, 0.0)
+                out.face_ddphi = np.where(ok[:, None], ddphi, 0.0)
 
     out.energy = energy
     if forces:
@@ -267,3 +281,189 @@ def hessian_matvec(model: BarHingeModel, ev: Evaluation, v: np.ndarray) -> np.nd
 def damping_matvec(model: BarHingeModel, v: np.ndarray) -> np.ndarray:
     """Damping matrix times ``v``: ``C v = −damping_forces(v)`` (a weighted graph Laplacian, PSD)."""
     return -damping_forces(model, v)
+
+
+def face_angle_energy(alpha: np.ndarray, alpha0: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Energy ``φ(α)`` of every face corner and its first two derivatives in α (arrays shaped like ``alpha``).
+
+    ``φ = ½ k (α − α0)²`` (Origami Simulator's face-angle spring) except within ``δ`` of 0° and of 180°, where it is
+    the parabola in ``α²`` (resp. ``(π − α)²``) that meets it with equal value and slope at ``δ``. The corner angle
+    of a triangle is a cone-shaped function of the node positions at 0° and 180° (a squashed triangle can open to
+    either side), so ``½ k (α − α0)²`` has a kink there: its gradient jumps, and a Newton step onto a squashed
+    sliver cannot be undone by the line search. A function of ``α²`` near 0 (``(π − α)²`` near π) is smooth in the
+    positions, so the cap makes the energy C¹ and its slope bounded (→ 0 at the squashed state).
+    ``δ = min(1°, α0/2)`` (``min(1°, (π − α0)/2)`` at 180°): the rest angle and everything within half of it are
+    untouched, so equilibria away from collapse are exactly Origami Simulator's.
+    """
+    lo = np.maximum(np.minimum(FACE_SMOOTH, 0.5 * alpha0), 1e-12)
+    hi = np.maximum(np.minimum(FACE_SMOOTH, 0.5 * (np.pi - alpha0)), 1e-12)
+    dev = alpha - alpha0
+    phi = 0.5 * k * dev * dev
+    dphi = k * dev
+    ddphi = np.full_like(alpha, k)
+    low = alpha < lo
+    if np.any(low):
+        b = k * (lo - alpha0) / (2.0 * lo)
+        a = 0.5 * k * (lo - alpha0) ** 2 - b * lo * lo
+        phi = np.where(low, a + b * alpha * alpha, phi)
+        dphi = np.where(low, 2.0 * b * alpha, dphi)
+        ddphi = np.where(low, 2.0 * b, ddphi)
+    high = alpha > np.pi - hi
+    if np.any(high):
+        s = np.pi - alpha
+        b = -k * (np.pi - hi - alpha0) / (2.0 * hi)
+        a = 0.5 * k * (np.pi - hi - alpha0) ** 2 - b * hi * hi
+        phi = np.where(high, a + b * s * s, phi)
+        dphi = np.where(high, -2.0 * b * s, dphi)
+        ddphi = np.where(high, 2.0 * b, ddphi)
+    return phi, dphi, ddphi
+
+
+def _csqrt_unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``v / |v|`` and ``|v|`` written with analytic operations only (valid for complex-step arguments)."""
+    norm = np.sqrt(np.einsum("...k,...k->...", v, v))
+    return v / norm[..., None], norm
+
+
+def hinge_angle_gradient(x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.ndarray) -> np.ndarray:
+    """``∇θ`` ``(m, 4, 3)`` with respect to wing 1, wing 2, edge node 1, edge node 2 (reference §3.4).
+
+    The same formula as :func:`evaluate` (``n/h`` on the wings, foot fractions ``t`` on the edge nodes), written
+    with analytic operations only so that complex-step differentiation gives its exact Jacobian ``∇²θ``.
+    """
+    e = x4 - x3
+    chat, L = _csqrt_unit(e)
+    r1, r2 = x1 - x3, x2 - x3
+    n1 = _csqrt_unit(_cross(e, r1))[0]  # (v2 − v1) × (w1 − v1): the normal of the face left of v1 → v2
+    n2 = _csqrt_unit(_cross(x3 - x4, x2 - x4))[0]
+    p1, p2 = _rows_dot(chat, r1), _rows_dot(chat, r2)
+    h1 = np.sqrt(_rows_dot(r1, r1) - p1 * p1)
+    h2 = np.sqrt(_rows_dot(r2, r2) - p2 * p2)
+    t1, t2 = p1 / L, p2 / L
+    g1 = n1 / h1[:, None]
+    g2 = n2 / h2[:, None]
+    g3 = -((1.0 - t1)[:, None] * g1 + (1.0 - t2)[:, None] * g2)
+    g4 = -(t1[:, None] * g1 + t2[:, None] * g2)
+    return np.stack([g1, g2, g3, g4], axis=1)
+
+
+def corner_angle_gradient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """``∂α_corner/∂x_node`` ``(m, 3, 3, 3)`` of the three corner angles of triangles ``(a, b, c)`` (reference §3.5),
+    with analytic operations only (for complex-step differentiation)."""
+    e_ab, l_ab = _csqrt_unit(b - a)
+    e_ac, l_ac = _csqrt_unit(c - a)
+    e_bc, l_bc = _csqrt_unit(c - b)
+    nrm = _csqrt_unit(_cross(b - a, c - a))[0]
+    P_ab = _cross(nrm, e_ab) / l_ab[:, None]
+    P_ac = _cross(nrm, e_ac) / l_ac[:, None]
+    P_bc = _cross(nrm, e_bc) / l_bc[:, None]
+    return np.stack(
+        [
+            np.stack([P_ab - P_ac, -P_ab, P_ac], axis=1),
+            np.stack([-P_ab, P_ab + P_bc, -P_bc], axis=1),
+            np.stack([P_ac, -P_bc, P_bc - P_ac], axis=1),
+        ],
+        axis=1,
+    )
+
+
+def _complex_step_jacobian(function, points: np.ndarray) -> np.ndarray:
+    """Jacobian of a vectorised gradient ``function(*nodes) -> (m, …, 3)`` by complex steps, all at once.
+
+    ``points`` is ``(m, q, 3)`` (q nodes per element); returns ``(m, …, q, 3)``: the derivative of every output
+    entry by every node coordinate, exact to round-off (no subtraction, so no step-size error).
+    """
+    m, q, _ = points.shape
+    z = np.broadcast_to(points, (3 * q, m, q, 3)).astype(np.complex128)
+    for k in range(3 * q):
+        z[k, :, k // 3, k % 3] += 1j * COMPLEX_STEP
+    z = z.reshape(3 * q * m, q, 3)
+    out = function(*(z[:, node] for node in range(q))).imag / COMPLEX_STEP  # (3q·m, …)
+    out = out.reshape(3 * q, m, *out.shape[1:])
+    return np.moveaxis(out, 0, -1).reshape(m, *out.shape[2:], q, 3)
+
+
+def _corner_curvature(x: np.ndarray, tri: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """``Σ_corners weight · ∇²α`` as node blocks ``(t, 3, 3, 3, 3)`` of triangles ``tri``, in closed form.
+
+    For the corner at P between ``u = Q − P`` and ``v = R − P``: ``α = arccos c``, ``c = û·v̂``,
+    ``∂c/∂u = q_u = (v̂ − c û)/|u|``, ``∂²c/∂u² = −(û q_uᵀ + q_u ûᵀ + c (I − ûûᵀ)/|u|)/|u|``,
+    ``∂²c/∂u∂v = ((I − v̂v̂ᵀ)/|v| − û q_vᵀ)/|u|``, and ``∇²α = −∇²c/sin α − (cos α/sin³α) ∇c∇cᵀ``; node P takes
+    ``−(∂u + ∂v)``. (The cap keeps ``weight`` → 0 where ``sin α`` → 0.)
+    """
+    eye = np.eye(3)
+    out = np.zeros((len(tri), 3, 3, 3, 3))
+    for corner, (pn, qn, rn) in enumerate(((0, 1, 2), (1, 2, 0), (2, 0, 1))):
+        u = x[tri[:, qn]] - x[tri[:, pn]]
+        v = x[tri[:, rn]] - x[tri[:, pn]]
+        uh, lu = _unit(u)
+        vh, lv = _unit(v)
+        c = _rows_dot(uh, vh)
+        s = np.sqrt(np.maximum(1.0 - c * c, 1e-24))
+        qu = (vh - c[:, None] * uh) / lu[:, None]
+        qv = (uh - c[:, None] * vh) / lv[:, None]
+        uu = uh[:, :, None] * uh[:, None, :]
+        vv = vh[:, :, None] * vh[:, None, :]
+        cuu = -(
+            uh[:, :, None] * qu[:, None, :] + qu[:, :, None] * uh[:, None, :] + (c / lu)[:, None, None] * (eye - uu)
+        )
+        cuu /= lu[:, None, None]
+        cvv = -(
+            vh[:, :, None] * qv[:, None, :] + qv[:, :, None] * vh[:, None, :] + (c / lv)[:, None, None] * (eye - vv)
+        )
+        cvv /= lv[:, None, None]
+        cuv = ((eye - vv) / lv[:, None, None] - uh[:, :, None] * qv[:, None, :]) / lu[:, None, None]
+        w = weight[:, corner]
+        f1 = (-w / s)[:, None, None]
+        f2 = (-w * c / s**3)[:, None, None]
+        duu = f1 * cuu + f2 * qu[:, :, None] * qu[:, None, :]
+        dvv = f1 * cvv + f2 * qv[:, :, None] * qv[:, None, :]
+        duv = f1 * cuv + f2 * qu[:, :, None] * qv[:, None, :]
+        dvu = duv.transpose(0, 2, 1)
+        dpq, dpr = -(duu + dvu), -(duv + dvv)
+        out[:, qn, qn] += duu
+        out[:, rn, rn] += dvv
+        out[:, qn, rn] += duv
+        out[:, rn, qn] += dvu
+        out[:, pn, qn] += dpq
+        out[:, qn, pn] += dpq.transpose(0, 2, 1)
+        out[:, pn, rn] += dpr
+        out[:, rn, pn] += dpr.transpose(0, 2, 1)
+        out[:, pn, pn] += duu + duv + dvu + dvv
+    return out
+
+
+def exact_hessian_blocks(
+    model: BarHingeModel, x: np.ndarray, ev: Evaluation
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """Element blocks of the exact Hessian ``∇²E`` at ``x`` (``ev`` evaluated there with ``jacobians=True``).
+
+    Returns ``(bars (b, 3, 3), hinges (h, 4, 4, 3, 3), faces (t, 3, 3, 3, 3))``, rows ``[node a, node b, i, j]``:
+    bars ``k (d̂d̂ᵀ + (1 − L0/ℓ)(I − d̂d̂ᵀ))`` (the geometric term also where it is negative), hinges
+    ``k ∇θ∇θᵀ + k (θ − θ̄) ∇²θ``, faces ``Σ_corners φ''(α) ∇α∇αᵀ + φ'(α) ∇²α``. ``∇²θ`` is the complex-step
+    Jacobian of :func:`hinge_angle_gradient`, ``∇²α`` is in closed form (:func:`_corner_curvature`). The Gauss–Newton
+    matrix is these without the curvature terms (``θ − θ̄``, ``φ'``) and with the negative bar term dropped.
+    """
+    i, j = model.bar_nodes[:, 0], model.bar_nodes[:, 1]
+    dhat, ell = _unit(x[j] - x[i])
+    outer = dhat[:, :, None] * dhat[:, None, :]
+    geo = 1.0 - model.bar_length / np.where(ell > 0, ell, 1.0)
+    bars = model.bar_k[:, None, None] * (outer + geo[:, None, None] * (np.eye(3) - outer))
+    hinges = faces = None
+    if ev.hinge_grad is not None and len(model.hinge_k):
+        g, k = ev.hinge_grad, ev.hinge_k
+        hinges = k[:, None, None, None, None] * g[:, :, None, :, None] * g[:, None, :, None, :]
+        active = np.flatnonzero((k != 0) & (ev.hinge_dev != 0))
+        if len(active):
+            nodes = np.column_stack([model.hinge_wings, model.hinge_edge_nodes])[active]
+            d2 = _complex_step_jacobian(hinge_angle_gradient, x[nodes])  # (m, 4, 3, 4, 3): [a, i, b, j]
+            hinges[active] += (k[active] * ev.hinge_dev[active])[:, None, None, None, None] * d2.transpose(
+                0, 1, 3, 2, 4
+            )
+    if ev.face_grad is not None:
+        fg = ev.face_grad
+        faces = np.einsum("tc,tcai,tcbj->tabij", ev.face_ddphi, fg, fg)
+        active = np.flatnonzero(np.any(ev.face_dphi != 0, axis=1))
+        if len(active):
+            faces[active] += _corner_curvature(x, model.triangles[active], ev.face_dphi[active])
+    return bars, hinges, faces

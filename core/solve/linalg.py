@@ -191,13 +191,19 @@ class BlockTridiagonal:
             out[self.dofs[k]] = np.diag(d)
         return out
 
-    def factor(self, storage: np.ndarray, shift: np.ndarray | float = 0.0) -> BlockFactor:
+    def factor(self, storage: np.ndarray, shift: np.ndarray | float = 0.0, inertia: bool = False) -> BlockFactor:
         """Block-Thomas factorisation of ``A + diag(shift)``, kept for cheap repeated solves.
 
         For every block the inverse of its Schur complement ``S_k`` and ``X_k = S_k⁻¹ B_kᵀ`` are stored, so one
         solve is only matrix–vector products (about ``3 Σ s_k²`` flops), cheap enough to serve as the
         preconditioner of conjugate gradients over several Newton iterations and animation frames.
         Raises ``np.linalg.LinAlgError`` for a singular or non-finite block; the caller increases the shift.
+
+        With ``inertia`` the factorisation also counts the negative eigenvalues of the matrix: block elimination
+        without pivoting is the congruence ``A = L diag(S_k) Lᵀ``, so by Sylvester's law the matrix has as many
+        negative eigenvalues as the pivots ``S_k`` together. Each ``S_k`` is tried by Cholesky; only where that
+        fails are its eigenvalues computed (see :attr:`BlockFactor.negative_pivots`,
+        :meth:`BlockFactor.negative_direction`).
         """
         shift_vec = np.broadcast_to(np.asarray(shift, dtype=np.float64), (3 * self.n_nodes,))
         K = len(self.blocks)
@@ -205,6 +211,8 @@ class BlockTridiagonal:
         xs: list[np.ndarray | None] = []
         subs: list[np.ndarray | None] = []
         prev_X = prev_B = None
+        negative = 0
+        lowest: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
         for k in range(K):
             s = self.sizes[k]
             D = storage[self.diag_offset[k] : self.diag_offset[k] + s * s].reshape(s, s)
@@ -212,6 +220,14 @@ class BlockTridiagonal:
             S[np.diag_indices(s)] += shift_vec[self.dofs[k]]
             if k > 0:
                 S -= prev_B @ prev_X
+            if inertia:
+                try:
+                    np.linalg.cholesky(S)
+                except np.linalg.LinAlgError:
+                    w, v = np.linalg.eigh(S)
+                    negative += int(np.sum(w < 0))
+                    if w[0] < lowest[0]:
+                        lowest = (float(w[0]), k, v[:, 0])
             Sinv = np.linalg.inv(S)
             if not np.all(np.isfinite(Sinv)):
                 raise np.linalg.LinAlgError(f"non-finite inverse of block {k}")
@@ -225,7 +241,10 @@ class BlockTridiagonal:
                 prev_X = prev_B = None
             xs.append(prev_X)
             subs.append(prev_B)
-        return BlockFactor(self.dofs, inverses, xs, subs, 3 * self.n_nodes)
+        out = BlockFactor(self.dofs, inverses, xs, subs, 3 * self.n_nodes)
+        out.negative_pivots = negative if inertia else None
+        out.lowest_pivot = lowest
+        return out
 
     def solve(self, storage: np.ndarray, rhs: np.ndarray, shift: np.ndarray | float = 0.0) -> np.ndarray:
         """Solve ``(A + diag(shift)) x = rhs`` (natural dof order, length ``3n``) by block Thomas elimination."""
@@ -237,6 +256,27 @@ class BlockFactor:
 
     def __init__(self, dofs, inverses, xs, subs, size: int):
         self.dofs, self.inverses, self.xs, self.subs, self.size = dofs, inverses, xs, subs, size
+        self.negative_pivots: int | None = None
+        """Number of negative eigenvalues of the factored matrix (``None`` when not computed)."""
+        self.lowest_pivot: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
+        """``(eigenvalue, block, eigenvector)`` of the most negative pivot eigenvalue found (block −1: none)."""
+
+    def negative_direction(self) -> np.ndarray | None:
+        """A direction ``w`` with ``wᵀ A w = λ_min(S_k) < 0`` (natural dof order), or ``None`` if A is not indefinite.
+
+        ``w = L⁻ᵀ z`` with ``z`` the lowest eigenvector of the pivot ``S_k`` (zero elsewhere), so
+        ``wᵀ A w = zᵀ S_k z``: a back substitution through the stored ``X_k`` from block ``k`` down to block 0.
+        """
+        value, k, z = self.lowest_pivot
+        if k < 0 or z is None or value >= 0:
+            return None
+        out = np.zeros(self.size)
+        nxt = z
+        out[self.dofs[k]] = nxt
+        for m in range(k - 1, -1, -1):
+            nxt = -self.xs[m] @ nxt
+            out[self.dofs[m]] = nxt
+        return out
 
     def apply(self, rhs: np.ndarray) -> np.ndarray:
         """``(A + diag(shift))⁻¹ rhs`` for a flat ``3n`` vector."""

@@ -17,7 +17,6 @@ dynamics towards it. Each iteration:
 
 Near convergence the energy decrease falls under floating-point resolution; there a step is accepted when it
 reduces the residual force instead.
-
 Pinned nodes (``fixed``, a boolean mask of degrees of freedom, ``core.solve.constraints``) are fixed degrees of
 freedom, not stiff springs: their force is left out of the right-hand side and the residual, their step is zero
 (CG runs on the free subspace), and the factorised preconditioner gets a large diagonal there so it decouples them.
@@ -33,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .forces import Evaluation, evaluate, hessian_matvec
+from .forces import Evaluation, evaluate, exact_hessian_blocks, hessian_matvec
 from .linalg import BlockFactor, BlockTridiagonal
 from .model import BarHingeModel
 
@@ -48,6 +47,24 @@ PCG_RTOL = 1e-2
 
 PIN_DIAGONAL = 1e12
 """Diagonal added to fixed degrees of freedom in the factorisation (relative to the force scale): decouples them."""
+
+TAIL_RESIDUAL = 1e-2
+"""Residual below which the exact Hessian (the tail) is tried instead of Gauss–Newton."""
+
+SLOW_RATIO = 0.7
+"""Gauss–Newton counts as slow (exact Hessian tried, wherever the residual is) when the residual shrank by less than
+this factor per iteration over the last :data:`SLOW_WINDOW` iterations."""
+
+SLOW_WINDOW = 4
+
+SADDLE_RESIDUAL = 1e-3
+"""An indefinite exact Hessian at a residual below this is a saddle: step along its negative curvature."""
+
+TRUST_RATIO = 0.25
+"""Smallest ratio of the actual to the quadratic model's energy decrease for which an exact Newton step is taken."""
+
+SADDLE_STEP = 0.05
+"""Largest nodal displacement of a negative-curvature step out of a saddle (normalised units)."""
 
 
 class HessianAssembler:
@@ -89,6 +106,20 @@ class HessianAssembler:
         self.assemblies += 1
         return self.matrix.assemble(np.concatenate(idx), np.concatenate(vals))
 
+    def assemble_exact(self, x: np.ndarray, ev: Evaluation) -> np.ndarray:
+        """Exact Hessian storage (``forces.exact_hessian_blocks``) at ``x``; ``ev`` made with ``jacobians=True``."""
+        bars, hinges, faces = exact_hessian_blocks(self.model, x, ev)
+        idx = [self.bar_index.reshape(-1)]
+        vals = [np.concatenate([bars, bars, -bars, -bars]).reshape(-1)]
+        if hinges is not None:
+            idx.append(self.hinge_index.reshape(-1))
+            vals.append(hinges.reshape(-1))
+        if faces is not None:
+            idx.append(self.face_index.reshape(-1))
+            vals.append(faces.reshape(-1))
+        self.assemblies += 1
+        return self.matrix.assemble(np.concatenate(idx), np.concatenate(vals))
+
 
 @dataclass
 class NewtonStats:
@@ -103,6 +134,9 @@ class NewtonStats:
     converged: bool = False
     residual: float = float("inf")
     message: str = ""
+    exact_iterations: int = 0
+    saddle_escapes: int = 0
+    negative_pivots: int | None = None
 
 
 @dataclass
@@ -113,6 +147,32 @@ class NewtonProgress:
     residual: float
     x: np.ndarray
     theta: np.ndarray
+
+
+@dataclass
+class Fixed:
+    """Pinned degrees of freedom of one solve: ``free`` ``(n, 3)`` bool (``None``: nothing pinned) and the diagonal
+    ``diag`` (``3n``) that decouples the pinned ones in a factorisation."""
+
+    free: np.ndarray | None = None
+    diag: np.ndarray | None = None
+
+    @classmethod
+    def of(cls, fixed: np.ndarray | None, force_scale: float) -> Fixed:
+        if fixed is None or not np.any(fixed):
+            return cls()
+        free = ~np.asarray(fixed, dtype=bool).reshape(-1, 3)
+        return cls(free, (~free).reshape(-1).astype(np.float64) * PIN_DIAGONAL * force_scale)
+
+    def forces(self, f: np.ndarray) -> np.ndarray:
+        """Forces on the free degrees of freedom only (``(n, 3)`` or flat ``3n``)."""
+        if self.free is None:
+            return f
+        return f * (self.free if f.ndim == 2 else self.free.reshape(-1))
+
+    def shift(self, shift: float) -> float | np.ndarray:
+        """A factorisation shift with the pinned degrees of freedom decoupled."""
+        return shift if self.diag is None else shift + self.diag
 
 
 def newton_solve(
@@ -145,6 +205,9 @@ def newton_steps(
     time_limit: float | None = None,
     lm_lambda: float = 1e-3,
     fixed: np.ndarray | None = None,
+    exact_tail: bool = True,
+    check_minimum: bool = True,
+    tail_residual: float = TAIL_RESIDUAL,
 ) -> Generator[NewtonProgress, None, tuple[np.ndarray, np.ndarray, Evaluation, NewtonStats, float]]:
     """Minimise the energy from ``x0`` (normalised) with fold-angle history ``theta0``, one iteration per ``next``.
 
@@ -154,6 +217,15 @@ def newton_steps(
 
     ``fixed`` (``(n, 3)`` bool): pinned degrees of freedom; they keep their value in ``x0`` and their (reaction)
     forces are left out of the residual.
+
+    Far from equilibrium every iteration is Gauss–Newton. Once the residual is below ``tail_residual``, or
+    Gauss–Newton is slow (:data:`SLOW_RATIO`), an iteration first tries the exact Hessian (``exact_tail``): where it
+    is positive definite (no negative pivot) its Newton step converges quadratically; where it is indefinite and the
+    residual is below :data:`SADDLE_RESIDUAL` the state is a saddle and a step along the negative-curvature
+    direction of the factorisation leaves it; otherwise (indefinite far from equilibrium, or a rejected step) the
+    iteration falls back to the PSD Gauss–Newton matrix. With ``check_minimum`` a converged state is accepted only
+    as a minimum: unless the last step already factored a positive definite exact Hessian, its inertia is measured
+    and a saddle is left along its negative curvature (one factorisation; warm-started animation frames skip it).
     """
     assembler = assembler or HessianAssembler(model)
     stats = NewtonStats()
@@ -161,78 +233,53 @@ def newton_steps(
     x = np.array(x0, dtype=np.float64)
     ev = evaluate(model, x, theta0, percent, jacobians=True)
     stats.force_evaluations += 1
-    free = None if fixed is None or not np.any(fixed) else ~np.asarray(fixed, dtype=bool).reshape(-1, 3)
-    pins = None if free is None else (~free).reshape(-1).astype(np.float64) * PIN_DIAGONAL * force_scale
-
-    def unpinned(forces: np.ndarray) -> np.ndarray:
-        return forces if free is None else forces * free
-
+    fx = Fixed.of(fixed, force_scale)
     lam = float(lm_lambda) * force_scale
     lam_min = 1e-9 * force_scale
+    history: list[float] = []
+    last_positive = False  # the last step was an exact Newton step at a positive definite Hessian
     for it in range(max_iterations + 1):
-        residual = float(np.max(np.linalg.norm(unpinned(ev.forces), axis=1))) / force_scale
+        residual = float(np.max(np.linalg.norm(fx.forces(ev.forces), axis=1))) / force_scale
         stats.residual = residual
+        history.append(residual)
         if not np.isfinite(residual):
             stats.message = f"non-finite residual force at Newton iteration {it}"
             break
+        step = None
         if residual <= tolerance:
-            stats.converged = True
-            stats.message = f"converged: residual {residual:.2e} ≤ {tolerance:.1e} after {it} iterations"
-            break
-        if it == max_iterations:
+            if exact_tail and check_minimum and not last_positive and it < max_iterations:
+                # converged, but to a minimum? (a Gauss–Newton run can settle on a saddle: it never sees the
+                # negative curvature). Measured once; at a saddle, step out along it and go on.
+                step = _leave_saddle(model, assembler, x, ev, residual, lam, force_scale, percent, stats, fx)
+                last_positive = step is None
+            if step is None:
+                stats.converged = True
+                stats.message = f"converged: residual {residual:.2e} ≤ {tolerance:.1e} after {it} iterations"
+                break
+        elif it == max_iterations:
             stats.message = f"not converged: residual {residual:.2e} after {it} iterations (limit)"
             break
-        if time_limit is not None and time.perf_counter() - t_start > time_limit:
+        elif time_limit is not None and time.perf_counter() - t_start > time_limit:
             stats.message = f"not converged: residual {residual:.2e} after {it} iterations (time limit {time_limit}s)"
             break
         stats.iterations = it + 1
-        rhs = unpinned(ev.forces).reshape(-1)
-        accepted = False
-        for _attempt in range(12):
-            try:
-                p = _step(model, assembler, ev, rhs, lam, stats, pins).reshape(-1, 3)
-            except np.linalg.LinAlgError:
-                assembler.factor = None
-                lam *= 10.0
-                continue
-            if not np.all(np.isfinite(p)):
-                assembler.factor = None
-                lam *= 10.0
-                continue
-            biggest = float(np.max(np.linalg.norm(p, axis=1)))
-            if biggest > MAX_STEP:
-                p *= MAX_STEP / biggest
-            slope = float(np.dot(rhs, p.reshape(-1)))  # = −∇E·p > 0 for a descent direction
-            if slope <= 0:
-                lam *= 10.0
-                continue
-            a = 1.0
-            for _ls in range(8):
-                trial = x + a * p
-                full = _ls == 0  # the full step is usually accepted: evaluate it completely, reused below
-                tev = evaluate(model, trial, ev.theta, percent, forces=full, jacobians=full)
-                if full:
-                    stats.force_evaluations += 1
-                else:
-                    stats.energy_evaluations += 1
-                decrease = ev.energy - tev.energy
-                if decrease >= 1e-4 * a * slope:
-                    accepted = True
-                    break
-                if abs(decrease) <= 1e-13 * max(abs(ev.energy), 1e-300) + 1e-300:
-                    # energy at round-off level: judge the step by the residual force instead
-                    rev = evaluate(model, trial, ev.theta, percent, jacobians=False)
-                    stats.force_evaluations += 1
-                    if np.max(np.linalg.norm(unpinned(rev.forces), axis=1)) < residual * force_scale:
-                        accepted = True
-                        break
-                a *= 0.5
-            if accepted:
-                lam = max(lam * (0.3 if a == 1.0 else 1.0), lam_min)
-                if a < 0.25:
-                    lam *= 4.0
-                break
-            lam *= 10.0
+        rhs = fx.forces(ev.forces).reshape(-1)
+        slow = len(history) > SLOW_WINDOW and residual > history[-1 - SLOW_WINDOW] * SLOW_RATIO**SLOW_WINDOW
+        if step is None and exact_tail and (residual <= tail_residual or slow):
+            step = _exact_step(model, assembler, x, ev, rhs, residual, lam, force_scale, percent, stats, fx)
+        last_positive = step is not None and step[2] == "newton"
+        if step is not None:
+            trial, tev, kind = step
+            accepted = True
+            if kind == "saddle":
+                history.clear()  # a new basin: judge Gauss–Newton afresh
+                lam = max(lam, float(lm_lambda) * force_scale)
+            else:
+                lam = max(lam * 0.3, lam_min)
+        else:
+            trial, tev, accepted, lam = _gauss_newton_step(
+                model, assembler, x, ev, rhs, residual, lam, lam_min, force_scale, percent, stats, fx
+            )
         if not accepted:
             stats.message = f"stalled: no descent step at Newton iteration {it} (residual {residual:.2e}, λ {lam:.1e})"
             break
@@ -243,9 +290,241 @@ def newton_steps(
             ev = evaluate(model, x, tev.theta, percent, jacobians=True)
             stats.force_evaluations += 1
         yield NewtonProgress(
-            it + 1, float(np.max(np.linalg.norm(unpinned(ev.forces), axis=1))) / force_scale, x, ev.theta
+            it + 1, float(np.max(np.linalg.norm(fx.forces(ev.forces), axis=1))) / force_scale, x, ev.theta
         )
     return x, ev.theta, ev, stats, lam / force_scale
+
+
+def _exact_step(
+    model: BarHingeModel,
+    assembler: HessianAssembler,
+    x: np.ndarray,
+    ev: Evaluation,
+    rhs: np.ndarray,
+    residual: float,
+    lam: float,
+    force_scale: float,
+    percent: float,
+    stats: NewtonStats,
+    fx: Fixed,
+) -> tuple[np.ndarray, Evaluation, str] | None:
+    """One exact-Hessian iteration: a Newton step where ``∇²E`` is positive definite, a negative-curvature step at a
+    saddle; ``None`` when neither is accepted (the caller takes a Gauss–Newton step instead).
+
+    The shift ``λ + 10·residual`` (Levenberg–Marquardt with damping ∝ the residual keeps quadratic convergence)
+    lifts the six rigid-body modes, whose curvature away from equilibrium is of the order of the residual.
+    """
+    n = model.n_nodes
+    H = assembler.assemble_exact(x, ev)
+    stats.hessian_assemblies += 1
+    shift = lam + 10.0 * residual * force_scale
+    try:
+        factor = assembler.matrix.factor(H, fx.shift(shift), inertia=True)
+    except np.linalg.LinAlgError:
+        return None
+    stats.linear_solves += 1
+    stats.negative_pivots = factor.negative_pivots
+    if factor.negative_pivots == 0:
+        p = fx.forces(factor.apply(rhs)).reshape(n, 3)
+        if not np.all(np.isfinite(p)):
+            return None
+        slope = float(np.dot(rhs, p.reshape(-1)))
+        curvature = slope - shift * float(np.sum(p * p))  # pᵀ∇²E p, since (∇²E + shift) p = F
+        biggest = float(np.max(np.linalg.norm(p, axis=1)))
+        if biggest > MAX_STEP:
+            c = MAX_STEP / biggest
+            p *= c
+            slope, curvature = c * slope, c * c * curvature
+        if slope <= 0:
+            return None
+        q = _geodesic_acceleration(model, factor, x, ev, p, percent, stats, fx)
+        a = 1.0
+        for _ls in range(6):
+            trial = x + a * p + (0.5 * a * a) * q
+            full = _ls == 0
+            tev = evaluate(model, trial, ev.theta, percent, forces=full, jacobians=full)
+            stats.force_evaluations += int(full)
+            stats.energy_evaluations += int(not full)
+            decrease = ev.energy - tev.energy
+            predicted = a * slope - 0.5 * a * a * curvature
+            # trust the quadratic model only where it predicts the decrease (trust-region ratio ≥ ¼): a step far
+            # along a soft mode, where the energy is not quadratic, is shortened instead of zig-zagging
+            if decrease >= TRUST_RATIO * predicted or _residual_judges(
+                model, trial, tev, ev, residual, force_scale, percent, stats, fx
+            ):
+                stats.exact_iterations += 1
+                return trial, tev, "newton"
+            a *= 0.5
+        return None
+    if residual > SADDLE_RESIDUAL:
+        return None
+    return _saddle_step(model, assembler, factor, x, ev, percent, stats, fx)
+
+
+def _leave_saddle(
+    model: BarHingeModel,
+    assembler: HessianAssembler,
+    x: np.ndarray,
+    ev: Evaluation,
+    residual: float,
+    lam: float,
+    force_scale: float,
+    percent: float,
+    stats: NewtonStats,
+    fx: Fixed,
+) -> tuple[np.ndarray, Evaluation, str] | None:
+    """At a converged state: the inertia of the exact Hessian; a negative-curvature step if it is a saddle."""
+    H = assembler.assemble_exact(x, ev)
+    stats.hessian_assemblies += 1
+    try:
+        factor = assembler.matrix.factor(H, fx.shift(lam + 10.0 * residual * force_scale), inertia=True)
+    except np.linalg.LinAlgError:
+        return None
+    stats.negative_pivots = factor.negative_pivots
+    if not factor.negative_pivots:
+        return None
+    return _saddle_step(model, assembler, factor, x, ev, percent, stats, fx)
+
+
+def _saddle_step(
+    model: BarHingeModel,
+    assembler: HessianAssembler,
+    factor: BlockFactor,
+    x: np.ndarray,
+    ev: Evaluation,
+    percent: float,
+    stats: NewtonStats,
+    fx: Fixed,
+) -> tuple[np.ndarray, Evaluation, str] | None:
+    """Step out of a saddle along the factorisation's negative-curvature direction (downhill side first), up to
+    :data:`SADDLE_STEP` per node, halved until the energy falls; ``None`` if it does not."""
+    n = model.n_nodes
+    w = factor.negative_direction()
+    if w is None:
+        return None
+    rhs = fx.forces(ev.forces).reshape(-1)
+    w = fx.forces(w.reshape(n, 3))
+    if not np.any(w):
+        return None
+    w *= SADDLE_STEP / max(float(np.max(np.linalg.norm(w, axis=1))), 1e-300)
+    if float(np.dot(rhs, w.reshape(-1))) < 0:
+        w = -w  # downhill (or level) along the negative curvature
+    for sign in (1.0, -1.0):
+        a = 1.0
+        for _ls in range(8):
+            trial = x + sign * a * w
+            tev = evaluate(model, trial, ev.theta, percent, forces=False)
+            stats.energy_evaluations += 1
+            if tev.energy < ev.energy - 1e-12 * abs(ev.energy):
+                stats.saddle_escapes += 1
+                assembler.factor = None
+                return trial, tev, "saddle"
+            a *= 0.5
+    return None
+
+
+def _geodesic_acceleration(
+    model: BarHingeModel,
+    factor: BlockFactor,
+    x: np.ndarray,
+    ev: Evaluation,
+    p: np.ndarray,
+    percent: float,
+    stats: NewtonStats,
+    fx: Fixed,
+) -> np.ndarray:
+    """Second-order correction ``q`` of a Newton step ``p``: the step becomes the curve ``x + a p + ½ a² q``.
+
+    Along a soft mode (a flap turning about its creases) the valley of the energy is curved: a straight step along
+    its tangent climbs the stiff bars by the square of its length, the trust-region test shortens it, and the next
+    iteration only comes back to the valley floor (a zig-zag of two iterations per small advance). ``q`` solves
+    ``∇²E q = d²F/dt²`` along ``p`` (central differences, ``t = ±0.1``, with the same factorisation), so that
+    ``∇E(x + p + ½q)`` vanishes to second order: the geodesic acceleration of Transtrum & Sethna (2012). Dropped
+    (zero) when it is not small beside the step (``|q| > |p|``)."""
+    h = 0.1
+    fp = evaluate(model, x + h * p, ev.theta, percent).forces
+    fm = evaluate(model, x - h * p, ev.theta, percent).forces
+    stats.force_evaluations += 2
+    q = fx.forces(factor.apply(fx.forces((fp - 2.0 * ev.forces + fm) / (h * h)).reshape(-1))).reshape(p.shape)
+    stats.linear_solves += 1
+    if not np.all(np.isfinite(q)) or np.linalg.norm(q) > np.linalg.norm(p):
+        return np.zeros_like(p)
+    return q
+
+
+def _residual_judges(
+    model: BarHingeModel,
+    trial: np.ndarray,
+    tev: Evaluation,
+    ev: Evaluation,
+    residual: float,
+    force_scale: float,
+    percent: float,
+    stats: NewtonStats,
+    fx: Fixed,
+) -> bool:
+    """Near convergence the energy decrease falls under round-off: accept a step that reduces the residual force."""
+    if abs(ev.energy - tev.energy) > 1e-13 * max(abs(ev.energy), 1e-300) + 1e-300:
+        return False
+    rev = tev if tev.forces is not None else evaluate(model, trial, ev.theta, percent, jacobians=False)
+    stats.force_evaluations += int(tev.forces is None)
+    return bool(np.max(np.linalg.norm(fx.forces(rev.forces), axis=1)) < residual * force_scale)
+
+
+def _gauss_newton_step(
+    model: BarHingeModel,
+    assembler: HessianAssembler,
+    x: np.ndarray,
+    ev: Evaluation,
+    rhs: np.ndarray,
+    residual: float,
+    lam: float,
+    lam_min: float,
+    force_scale: float,
+    percent: float,
+    stats: NewtonStats,
+    fx: Fixed,
+) -> tuple[np.ndarray, Evaluation, bool, float]:
+    """One Levenberg–Marquardt Gauss–Newton iteration with Armijo backtracking; returns ``(x, ev, accepted, λ)``."""
+    trial, tev = x, ev
+    for _attempt in range(12):
+        try:
+            p = _step(model, assembler, ev, rhs, lam, stats, fx.diag).reshape(-1, 3)
+        except np.linalg.LinAlgError:
+            assembler.factor = None
+            lam *= 10.0
+            continue
+        if not np.all(np.isfinite(p)):
+            assembler.factor = None
+            lam *= 10.0
+            continue
+        biggest = float(np.max(np.linalg.norm(p, axis=1)))
+        if biggest > MAX_STEP:
+            p *= MAX_STEP / biggest
+        slope = float(np.dot(rhs, p.reshape(-1)))  # = −∇E·p > 0 for a descent direction
+        if slope <= 0:
+            lam *= 10.0
+            continue
+        a = 1.0
+        for _ls in range(8):
+            trial = x + a * p
+            full = _ls == 0  # the full step is usually accepted: evaluate it completely, reused below
+            tev = evaluate(model, trial, ev.theta, percent, forces=full, jacobians=full)
+            if full:
+                stats.force_evaluations += 1
+            else:
+                stats.energy_evaluations += 1
+            decrease = ev.energy - tev.energy
+            if decrease >= 1e-4 * a * slope or _residual_judges(
+                model, trial, tev, ev, residual, force_scale, percent, stats, fx
+            ):
+                lam = max(lam * (0.3 if a == 1.0 else 1.0), lam_min)
+                if a < 0.25:
+                    lam *= 4.0
+                return trial, tev, True, lam
+            a *= 0.5
+        lam *= 10.0
+    return trial, tev, False, lam
 
 
 def _step(

@@ -167,3 +167,20 @@ def test_face_angle_energy_is_origami_simulators_away_from_the_caps():
     assert np.allclose(phi, 0.5 * 0.2 * (alpha - alpha0) ** 2) and np.allclose(dphi, 0.2 * (alpha - alpha0))
     squashed = F.face_angle_energy(np.array([0.0, np.pi]), np.radians(np.array([30.0, 150.0])), 0.2)
     assert np.all(squashed[1] == 0) and np.all(np.isfinite(squashed[0]))  # zero slope at 0° and 180°
+
+
+def test_static_fold_reports_the_state_and_where_another_branches_off():
+    """A static fold (continuation) that had to leave a saddle says so: a stable minimum with its energy, and the
+    fold percent where the other branch is."""
+    from curved_fold.core.pipeline import state_report
+
+    solver = buckling_solver(exact_tail=True)
+    result = solver.solve(0.0)  # from the flat sheet: continuation, converged only at a minimum
+    assert result.converged and result.continuation_steps == 1
+    assert result.saddle_escapes >= 1 and result.saddle_percents == [0.0]
+    report = state_report(result)
+    assert report["negative_pivots"] == 0
+    assert report["state"] == f"stable minimum (energy {result.energy:.6g})"
+    assert "passed a saddle near 0 %" in report["other_state_near"]
+    plain = state_report(Solver(grid_mesh(3, 3, creases={(1, 5): ("V", 90.0)}), SolverSettings()).solve(0.6))
+    assert plain["state"].startswith("stable minimum") and "other_state_near" not in plain

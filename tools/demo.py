@@ -17,8 +17,7 @@ into an oval), and pictured in ``docs/img/pins_glue.png`` through the add-on (Fo
 creases make alone beside the held one, which neither creases nor glue alone can make.
 
 Then ``docs/img/make_pictures.py`` (the operators' fold-percent / strain / warp pictures) is run on Origami
-Simulator's ``wavy_pleats.svg`` from the shared fixtures (skipped, with a message, when they are not beside the
-repository).
+Simulator's ``wavy_pleats.svg`` from the fixtures vendored in ``tests/fixtures``.
 
 Every step echoes its command and output. Exit code 0 when every step succeeded, 1 otherwise (the failures are
 listed at the end). ``cannot_fold.svg`` is meant not to fold as assigned: the demo shows the warning the
@@ -279,15 +278,8 @@ def picture_step(svg: Path, png: Path) -> bool:
 def operator_pictures() -> bool:
     """Run ``docs/img/make_pictures.py`` (fold percents, strain and warp colours of Jun Mitani's ``wavy_pleats.svg``).
 
-    The pictures and the guide's captions are of that fixture, so without the shared fixtures beside the repository
-    the step is skipped (the committed pictures stay) rather than silently rendering another pattern.
+    The pictures and the guide's captions are of that fixture (vendored with its licence and credit).
     """
-    if not FIXTURE.is_file():
-        print(
-            f"demo: SKIPPED the operator pictures: {FIXTURE} not found (docs/img/fold_percent.png, strain.png and "
-            "warp.png show that fixture and were left as they are)"
-        )
-        return True
     script = IMG / "make_pictures.py"
     return run_step(f"python {_show(script)} {_show(FIXTURE)}", [sys.executable, str(script), str(FIXTURE)])
 

@@ -5,7 +5,8 @@ Runs headless through the add-on's own operators (Import Crease Pattern, Fold, R
     .venv/bin/python docs/img/make_pictures.py [pattern.svg]
 
 writes ``docs/img/fold_percent.png``, ``docs/img/strain.png`` and ``docs/img/warp.png`` (Workbench, 8× AA; no GPU
-needed beyond Mesa's llvmpipe). The default pattern is Origami Simulator's ``wavy_pleats.svg`` from the shared fixtures.
+needed beyond Mesa's llvmpipe). The default pattern is Origami Simulator's ``wavy_pleats.svg``
+(vendored in ``tests/fixtures``).
 """
 
 from __future__ import annotations

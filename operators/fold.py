@@ -1,4 +1,6 @@
-"""Fold and Re-fold operators: crease curves → ruling-aware mesh → folded mesh object (source curves untouched)."""
+"""Fold and Re-fold operators: crease curves → ruling-aware mesh → folded mesh object (source curves untouched).
+
+Both run as jobs (``job_modal``): in slices with progress and Esc from the interface, blocking from scripts."""
 
 from __future__ import annotations
 
@@ -7,12 +9,13 @@ import math
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, StringProperty
 
-from ..scene import folding, mesh_object
-from ..scene.fold_settings import MESH_TYPES, override_angle_degrees, pattern_parameters
+from ..scene import folding
+from ..scene.fold_settings import MESH_TYPES
 from . import _common
+from .job_modal import JobOperator
 
 
-class CURVED_FOLD_OT_fold(bpy.types.Operator):
+class CURVED_FOLD_OT_fold(JobOperator, bpy.types.Operator):
     """Build the ruling-aware mesh from the selected crease curves (or a collection) and fold it"""
 
     bl_idname = "curved_fold.fold"
@@ -22,6 +25,7 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
         "the result into a new mesh object beside them; the curves are not changed"
     )
     bl_options = {"REGISTER", "UNDO"}
+    failure = "Fold failed"
 
     collection: StringProperty(
         name="Collection", description="Fold the crease curves of this collection instead of the selection"
@@ -89,49 +93,21 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
             return coll, folding.curve_objects(coll.all_objects)
         return None, folding.curve_objects(context.selected_objects or [])
 
-    def execute(self, context):
-        try:
-            coll, sources = self._sources(context)
-            pattern = folding.pattern_from_objects(sources, **pattern_parameters(self, context.scene))
-            out = folding.fold_from_pattern(
-                pattern,
-                None,
-                percent=self.fold_percent / 100.0,
-                angle=override_angle_degrees(self),
-                mesh_type=self.mesh_type,
-                solver=self.solver,
-            )
-        except folding.engine_errors() as exc:
-            self.report({"ERROR"}, f"Fold failed: {exc}")
-            return {"CANCELLED"}
-        target = sources[0].users_collection[0] if sources[0].users_collection else context.scene.collection
-        name = mesh_object.fold_object_name(coll, sources)
-        ob = None
-        try:
-            ob = mesh_object.create_fold_object(
-                out.mesh,
-                out.positions,
-                name,
-                target,
-                fold_angles_sim=out.fold_angles,
-                strain_pct=out.strain_pct,
-                warp_deg=out.warp_deg,
-                scene=context.scene,
-            )
-            mesh_object.place_beside(ob, sources, context.view_layer)  # beside the curves and earlier folds
-            props = ob.curved_fold_mesh
-            props.is_fold_mesh = True
-            props.source_collection = coll
-            for src in sources:
-                props.sources.add().object = src
-            props.interval, props.tolerance, props.mesh_type = self.interval, self.tolerance, self.mesh_type
-            props.use_fold_angle, props.fold_angle = self.use_fold_angle, self.fold_angle
-            props.fold_percent, props.solver = self.fold_percent, self.solver
-            folding.store_figures(ob, out)
-        except Exception as exc:  # any write failure: remove what was made, report, leave the scene as it was
-            mesh_object.remove_fold_object(ob)
-            self.report({"ERROR"}, f"Fold failed while writing the mesh: {exc}")
-            return {"CANCELLED"}
+    def make_job(self, context):
+        coll, sources = self._sources(context)
+        options = folding.FoldOptions(
+            interval=self.interval,
+            tolerance=self.tolerance,
+            mesh_type=self.mesh_type,
+            use_fold_angle=self.use_fold_angle,
+            fold_angle=self.fold_angle,
+            fold_percent=self.fold_percent,
+            solver=self.solver,
+        )
+        return folding.fold_job(sources, coll, options, scene=context.scene)
+
+    def done(self, context, result) -> None:
+        ob, out = result
         for other in context.selected_objects:
             other.select_set(False)
         ob.select_set(True)
@@ -142,10 +118,9 @@ class CURVED_FOLD_OT_fold(bpy.types.Operator):
         if props.last_message:
             self.report({"WARNING"}, f"'{ob.name}' {props.last_message}")
         self.report({"INFO"}, f"Folded '{ob.name}': {folding.figures_text(props)}")
-        return {"FINISHED"}
 
 
-class CURVED_FOLD_OT_refold(bpy.types.Operator):
+class CURVED_FOLD_OT_refold(JobOperator, bpy.types.Operator):
     """Fold the active folded mesh again from its source curves and current settings"""
 
     bl_idname = "curved_fold.refold"
@@ -171,19 +146,17 @@ class CURVED_FOLD_OT_refold(bpy.types.Operator):
     def poll(cls, context):
         return _common.poll_fold_object(cls, context)
 
-    def execute(self, context):
-        ob = context.active_object
+    def make_job(self, context):
         rebuild = {"AUTO": None, "REBUILD": True, "RESOLVE": False}[self.rebuild]
-        try:
-            folding.refold(ob, rebuild=rebuild, scene=context.scene)
-        except folding.engine_errors() as exc:
-            self.report({"ERROR"}, f"Re-fold of '{ob.name}' failed: {exc}")
-            return {"CANCELLED"}
+        self.failure = f"Re-fold of '{context.active_object.name}' failed"
+        return folding.refold_job(context.active_object, rebuild=rebuild, scene=context.scene)
+
+    def done(self, context, out) -> None:
+        ob = context.active_object
         props = ob.curved_fold_mesh
         if props.last_message:
             self.report({"WARNING"}, f"'{ob.name}' {props.last_message}")
         self.report({"INFO"}, f"Re-folded '{ob.name}': {folding.figures_text(props)}")
-        return {"FINISHED"}
 
 
 CLASSES = (CURVED_FOLD_OT_fold, CURVED_FOLD_OT_refold)

@@ -15,6 +15,20 @@ def _fold_props(context):
     return props if props is not None and props.is_fold_mesh else None
 
 
+def _job_progress(layout, name: str) -> None:
+    """Progress rows of the job running on the fold object ``name`` (iteration and residual, or frame k of n)."""
+    from ..scene.jobs import running_job
+
+    job = running_job(name)
+    if job is None:
+        return
+    text = f"{job.kind.capitalize()}: {job.progress.text(job.elapsed_ms / 1e3)} (Esc cancels)"
+    if hasattr(layout, "progress"):  # UILayout.progress: Blender 4.0+
+        layout.progress(factor=job.progress.fraction, type="BAR", text=text)
+    else:  # pragma: no cover
+        layout.label(text=text, icon="TIME")
+
+
 class VIEW3D_PT_curved_fold_fold(SidebarPanel, bpy.types.Panel):
     """Fold the selected crease curves"""
 
@@ -29,6 +43,11 @@ class VIEW3D_PT_curved_fold_fold(SidebarPanel, bpy.types.Panel):
         layout = self.layout
         curves = [ob for ob in context.selected_objects if ob.type == "CURVE"]
         layout.label(text=f"{len(curves)} curve(s) selected", icon="CURVE_BEZCURVE")
+        from ..scene import jobs
+
+        for owner, job in list(jobs._jobs.items()):
+            if job.kind == "folding":
+                _job_progress(layout, owner)
         layout.operator("curved_fold.fold", icon="MOD_SIMPLEDEFORM")
         layout.operator("curved_fold.import_pattern", icon="IMPORT")
 
@@ -48,6 +67,7 @@ class VIEW3D_PT_curved_fold_mesh(SidebarPanel, bpy.types.Panel):
         props = _fold_props(context)
         layout.use_property_split = True
         layout.use_property_decorate = True  # the keyframe dot: Fold Percent animates the fold
+        _job_progress(layout, context.active_object.name)
         col = layout.column()
         col.prop(props, "fold_percent", slider=True)
         row = col.row(align=True)
@@ -115,13 +135,16 @@ class VIEW3D_PT_curved_fold_animation(SidebarPanel, bpy.types.Panel):
         row.prop(props, "steps_per_frame")
         scene = context.scene
         layout.label(text=f"Frames {scene.frame_start}–{scene.frame_end}; baked: {props.baked_frames}")
-        from ..operators.bake import RUNNING
-
-        running = RUNNING.get(context.active_object.name)
-        if running is not None and hasattr(layout, "progress"):  # UILayout.progress: Blender 4.0+
-            layout.progress(factor=running, type="BAR", text=f"Baking… {100 * running:.0f} % (Esc cancels)")
+        stale = bool(context.active_object.get("cf_bake_stale"))
+        if stale:
+            box = layout.box()
+            box.alert = True
+            box.label(text="Bake out of date (live re-fold): Re-bake", icon="ERROR")
         row = layout.row(align=True)
-        row.operator("curved_fold.bake", icon="RENDER_ANIMATION")
+        if stale:
+            row.operator("curved_fold.bake", text="Re-bake", icon="RENDER_ANIMATION")
+        else:
+            row.operator("curved_fold.bake", icon="RENDER_ANIMATION")
         row.operator("curved_fold.clear_bake", text="", icon="X")
         row = layout.row(align=True)
         row.operator("curved_fold.export_folded", text="Export Mesh", icon="EXPORT")

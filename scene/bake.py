@@ -16,6 +16,8 @@ the keys and F-curves it created are removed before the exception propagates.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
+from dataclasses import field as dc_field
 
 import bpy
 import numpy as np
@@ -189,3 +191,206 @@ def bake_shape_keys(
         raise
     me.update()
     return [key_name(f) for f in frames]
+
+
+# ------------------------------------------------------------------------------------------ out-of-date bakes
+
+STALE_KEY = "cf_bake_stale"
+"""Object ID property: the bake no longer matches the fold (a live re-fold changed it); Re-bake is offered."""
+STALE_MESH_KEY = "cf_stale_bake_mesh"
+"""Object ID property: name of the previous mesh datablock that still holds an out-of-date bake (live re-mesh)."""
+
+
+def is_stale(ob: bpy.types.Object) -> bool:
+    """Whether ``ob`` has a bake that is out of date (kept, muted, Re-bake offered)."""
+    return bool(ob.get(STALE_KEY, False))
+
+
+def mark_stale(ob: bpy.types.Object) -> None:
+    """Mark ``ob``'s bake out of date: its keys stay but are muted, so the live fold shows; Re-bake replaces them."""
+    ob[STALE_KEY] = True
+    keys = getattr(ob.data, "shape_keys", None)
+    if keys is not None:
+        for k in keys.key_blocks:
+            if k.name.startswith(KEY_PREFIX):
+                k.mute = True
+
+
+def keep_stale_mesh(ob: bpy.types.Object) -> str:
+    """Before a live re-mesh replaces ``ob``'s mesh: keep the old mesh (it holds the bake) under a fake user, named
+    "<name> (out-of-date bake)"; returns the name the new mesh should take."""
+    me = ob.data
+    base = me.name
+    old = bpy.data.meshes.get(str(ob.get(STALE_MESH_KEY, "")))
+    if old is not None and old is not me and old.users <= 1:  # an older out-of-date bake: this one replaces it
+        old.use_fake_user = False
+        if old.users == 0:
+            bpy.data.meshes.remove(old)
+    me.use_fake_user = True
+    me.name = f"{base} (out-of-date bake)"
+    ob[STALE_MESH_KEY] = me.name
+    return base
+
+
+def restore_stale_mesh(ob: bpy.types.Object, base: str) -> None:
+    """Undo :func:`keep_stale_mesh` (the re-mesh failed and ``ob`` keeps its mesh)."""
+    ob.data.use_fake_user = False
+    ob.data.name = base
+    ob.pop(STALE_MESH_KEY, None)
+
+
+def forget_stale(ob: bpy.types.Object) -> None:
+    """A new bake (or a cleared one): drop the out-of-date mark and the kept old mesh."""
+    ob.pop(STALE_KEY, None)
+    name = ob.pop(STALE_MESH_KEY, None)
+    old = bpy.data.meshes.get(str(name)) if name else None
+    if old is not None and old is not ob.data:
+        old.use_fake_user = False
+        if old.users == 0:
+            bpy.data.meshes.remove(old)
+
+
+# ------------------------------------------------------------------------------------------ the bake job
+
+
+def percent_schedule(ob: bpy.types.Object, frames: Sequence[int]) -> np.ndarray:
+    """Fold percent (fraction) per frame: the keyframed ``curved_fold_mesh.fold_percent`` if animated, else a
+    linear ramp from 0 to the set percent over ``frames``."""
+    props = ob.curved_fold_mesh
+    fc = percent_fcurve(ob)
+    if fc is not None:
+        return np.clip(np.array([fc.evaluate(f) for f in frames], dtype=np.float64) / 100.0, 0.0, 1.0)
+    if len(frames) == 1:
+        return np.array([props.fold_percent / 100.0])
+    return np.linspace(0.0, props.fold_percent / 100.0, len(frames))
+
+
+def percent_fcurve(ob: bpy.types.Object):
+    """The F-curve animating ``ob``'s Fold Percent, or None."""
+    return next((f for f in _fcurves(ob) if f.data_path == "curved_fold_mesh.fold_percent"), None)
+
+
+def write_bake(ob: bpy.types.Object, frames: Sequence[int], positions: Sequence[np.ndarray], mesh, *, scene=None):
+    """Write every frame as keyed shape keys (all or nothing), the last frame's strain/warp colours, and mark the
+    bake current; returns the object."""
+    from . import folding, mesh_object
+
+    bake_shape_keys(ob, frames, positions, scene=scene)
+    ob.curved_fold_mesh.baked_frames = len(frames)
+    forget_stale(ob)
+    strain_pct, warp_deg = folding.display_metrics(mesh, positions[-1])
+    me = ob.data
+    mesh_object.write_colours(me, "cf_strain", strain_pct, mesh_object.STRAIN_CLIP_PCT)
+    mesh_object.write_colours(me, "cf_warp", warp_deg, mesh_object.WARP_CLIP_DEG)
+    return ob
+
+
+@dataclass
+class BakeSummary:
+    """What a bake wrote: frames, solver iterations, frames taken from the timeline cache, unconverged frames."""
+
+    ob_name: str
+    frames: list[int]
+    iterations: int = 0
+    cached: int = 0
+    unconverged: list[int] = dc_field(default_factory=list)
+    ms: float = 0.0
+
+    def text(self) -> str:
+        t = (
+            f"baked {len(self.frames)} frames in {self.ms:.0f} ms ({self.iterations} solver iterations, "
+            f"{self.cached} frames from the timeline cache)"
+        )
+        if self.unconverged:
+            more = "..." if len(self.unconverged) > 5 else ""
+            t += f"; not converged at frames {self.unconverged[:5]}{more}"
+        return t
+
+
+def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
+    """The Bake operator's one scene call: a job that folds ``ob`` frame by frame (units: solver iterations, or
+    chunks of explicit steps in dynamic mode) and, when done, writes the shape keys and returns a
+    :class:`BakeSummary`. Quasi-static frames come from, and go to, the timeline cache (``timeline``): a frame
+    solved during playback is not solved again, and each new frame warm-starts from the nearest solved one."""
+    import time
+
+    from . import folding, jobs, timeline
+
+    frames = [int(f) for f in frames]
+    if not frames:
+        raise ValueError("the frame range is empty")
+    props = ob.curved_fold_mesh
+    name = ob.name
+    percents = percent_schedule(ob, frames)
+    summary = BakeSummary(name, frames)
+    dynamic = props.solver_mode == "DYNAMIC"
+    cache = timeline.cache_for(ob)
+    mesh = cache.mesh
+    n = len(frames)
+
+    def steps():
+        t0 = time.perf_counter()
+        positions = []
+        if dynamic:
+            from ..core.solve.solver import Solver
+
+            solver = Solver(mesh, folding.solver_settings(props), "faithful")
+            x, theta, v = mesh.vertices_3d.copy(), None, None
+            per_frame = int(props.steps_per_frame)
+            for i, f in enumerate(frames):
+                done = 0
+                while done < per_frame:
+                    k = min(per_frame - done, 50)
+                    r = solver.solve(
+                        float(percents[i]),
+                        start=x,
+                        theta_prev=theta,
+                        velocities=v,
+                        max_steps=k,
+                        stop_on_convergence=False,
+                    )
+                    x, theta, v = r.positions, r.theta, r.velocities
+                    done += k
+                    summary.iterations += k
+                    yield jobs.Progress(
+                        "frame",
+                        done,
+                        r.residual,
+                        frame=i + 1,
+                        n_frames=n,
+                        fraction=(i + done / per_frame) / n,
+                        positions=x,
+                    )
+                if not np.all(np.isfinite(x)):
+                    raise FloatingPointError(f"frame {f}: the solver returned non-finite positions")
+                positions.append(np.asarray(x, dtype=np.float64))
+        else:
+            for i, f in enumerate(frames):
+                hit = cache.get(f, float(percents[i]), props)
+                if hit is not None:
+                    summary.cached += 1
+                    entry = hit
+                else:
+                    entry = yield from cache.solve_steps(f, float(percents[i]), props, frame_index=i, n_frames=n)
+                    summary.iterations += entry.iterations
+                if not entry.converged:
+                    summary.unconverged.append(f)
+                positions.append(entry.positions)
+                yield jobs.Progress(
+                    "frame",
+                    entry.iterations,
+                    entry.residual,
+                    frame=i + 1,
+                    n_frames=n,
+                    fraction=(i + 1) / n,
+                    positions=entry.positions,
+                )
+        summary.ms = 1e3 * (time.perf_counter() - t0)
+
+        def commit():
+            write_bake(bpy.data.objects[name], frames, positions, mesh, scene=scene)
+            return summary
+
+        return commit
+
+    return jobs.Job(name, "baking", steps(), jobs.PositionsPreview(ob, scene))

@@ -7,14 +7,17 @@ code. Everything is computed first (pure ``core``) and written last, so a failur
 
 from __future__ import annotations
 
+import time
+from collections.abc import Generator
 from dataclasses import dataclass, field
+from typing import Any
 
 import bpy
 import numpy as np
 
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
-from . import bake, mesh_object, pins, self_intersection
+from . import bake, jobs, mesh_object, pins, self_intersection
 from .fold_settings import override_angle_degrees, override_fold_angles, pattern_parameters, settings_dict
 
 
@@ -143,9 +146,7 @@ def fold_from_pattern(
     method = solver or (props.solver if props is not None else "fast")
     if angle is None:
         angle = override_angle_degrees(props)
-    pattern = override_fold_angles(
-        pattern, angle
-    )  # Override Crease Angles applies to every crease, not only unset ones
+    pattern = override_fold_angles(pattern, angle)  # Override Crease Angles applies to every crease
     run = fold_pattern(
         pattern,
         angle=angle,
@@ -235,35 +236,316 @@ def refold(
     scene=None,
     max_iterations: int | None = None,
     warm_start: bool = False,
+    live: bool = False,
 ) -> FoldOutcome:
-    """Re-fold the fold object ``ob``: rebuild the mesh from its source curves (when it has sources and ``rebuild``
-    is not False) or re-solve its stored mesh, then write the result. Any bake is cleared (it would be stale).
+    """Re-fold the fold object ``ob`` in one blocking call: :func:`refold_job` run to its end (scripts). Raises the
+    engine's errors unchanged, with the scene as it was."""
+    job = refold_job(ob, rebuild=rebuild, scene=scene, max_iterations=max_iterations, warm_start=warm_start, live=live)
+    return jobs.run_to_end(jobs.start(job))
 
-    ``warm_start`` starts a re-solve from the current shape instead of the flat sheet (live edits of the fold
-    percent). Everything is computed before anything is written; raises the engine's errors unchanged.
-    """
+
+# ------------------------------------------------------------------------------------------ sliced jobs
+
+
+def solve_progress(
+    solver,
+    percent: float,
+    *,
+    start: np.ndarray | None = None,
+    theta_prev: np.ndarray | None = None,
+    velocities: np.ndarray | None = None,
+    chunk_ms: float = 30.0,
+) -> Generator[jobs.Progress, None, Any]:
+    """One solve of ``solver`` at ``percent`` in units of work: a Newton iteration (fast methods,
+    ``Solver.solve_steps``) or a chunk of explicit steps (faithful; chunks are multiples of ``check_every`` so the
+    convergence checks fall on the same steps as in one call: the result equals ``Solver.solve``'s). Yields
+    :class:`jobs.Progress` with the positions reached; returns the ``FoldResult``."""
+    from dataclasses import replace
+
+    if solver.method != "faithful":
+        steps = solver.solve_steps(percent, start=start, theta_prev=theta_prev)
+        while True:
+            try:
+                p = next(steps)
+            except StopIteration as done:
+                return done.value
+            cap = max(int(solver.settings.max_iterations), 1)
+            yield jobs.Progress(
+                "solve", p.iteration, p.residual, fraction=min(p.iteration / cap, 1.0), positions=p.positions
+            )
+    s = solver.settings
+    check = max(int(s.check_every), 1)
+    chunk = check
+    total = None
+    x, theta, v = start, theta_prev, velocities
+    done_steps, evaluations, ms = 0, 0, 0.0
+    while True:
+        n = min(chunk, s.max_steps - done_steps)
+        t0 = time.perf_counter()
+        r = solver.solve(percent, start=x, theta_prev=theta, velocities=v, max_steps=n)
+        dt_ms = 1e3 * (time.perf_counter() - t0)
+        done_steps += r.iterations
+        evaluations += r.force_evaluations
+        ms += r.simulation_ms
+        x, theta, v = r.positions, r.theta, r.velocities
+        total = r
+        if r.converged or done_steps >= s.max_steps or r.iterations < n:
+            break
+        if s.time_limit is not None and ms > 1e3 * s.time_limit:
+            break
+        yield jobs.Progress(
+            "solve", done_steps, r.residual, fraction=done_steps / max(s.max_steps, 1), positions=r.positions
+        )
+        per_step = dt_ms / max(r.iterations, 1)
+        chunk = max(check, int(chunk_ms / max(per_step, 1e-6)) // check * check)
+    return replace(total, iterations=done_steps, force_evaluations=evaluations, simulation_ms=ms)
+
+
+def _mesh_steps(pattern_fn, angle, mesh_type) -> Generator[jobs.Progress, None, Any]:
+    """Discretise and mesh (one unit: usually well under 100 ms, see docs/benchmarks.md); returns the FoldMesh and
+    the pattern's warnings."""
+    from ..core.mesh.build import build_mesh
+    from ..core.pipeline import _with_angle
+
+    pattern = _with_angle(override_fold_angles(pattern_fn(), angle), angle)  # Override applies to every crease
+    mesh = build_mesh(pattern, mesh_type=mesh_type)
+    yield jobs.Progress("model")
+    return mesh, list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings)
+
+
+def _solve_steps(mesh, props, percent, method, *, start=None, max_iterations=None, warnings=None):
+    """Build the model (one unit), then solve in units; returns the :class:`FoldOutcome`."""
+    from ..core.pipeline import FoldRun, make_report
+    from ..core.solve.solver import Solver
+
+    solver = Solver(mesh, solver_settings(props, max_iterations=max_iterations), method)
+    if method != "faithful":
+        solver.assembler  # noqa: B018 - the Hessian ordering: part of this unit, not the first iteration
+    yield jobs.Progress("solve")
+    result = yield from solve_progress(solver, percent, start=start)
+    report = make_report(
+        mesh, result, percent, mesh_type=mesh.mesh_type, solver=method, warnings=list(warnings or mesh.warnings)
+    )
+    return outcome_from_run(FoldRun(mesh, result, report), percent)
+
+
+@dataclass
+class FoldOptions:
+    """The Fold operator's options: pattern parameters and fold settings of a new fold object."""
+
+    interval: float = 0.0
+    tolerance: float = 0.0
+    mesh_type: str = "ruling"
+    use_fold_angle: bool = False
+    fold_angle: float = 180.0
+    fold_percent: float = 100.0
+    solver: str = "fast"
+
+
+def new_fold_name(sources, coll) -> str:
+    """Name of the fold object made from ``sources`` (or the collection ``coll``): ``mesh_object.fold_object_name``."""
+    return mesh_object.fold_object_name(coll, sources)
+
+
+def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
+    """The Fold operator's one scene call: a job that meshes and folds ``sources`` (crease curves of ``coll`` or
+    the selection) and, when done, creates the fold object beside them and returns ``(object, FoldOutcome)``.
+    Raises the engine's errors for an empty selection before any work."""
+    if not sources:
+        raise PatternError("no crease curves selected: select curve objects that have a crease role")
+    target = sources[0].users_collection[0] if sources[0].users_collection else bpy.context.scene.collection
+    name = new_fold_name(sources, coll)
+    source_names = [s.name for s in sources]
+    coll_name = coll.name if coll is not None else None
+    preview = jobs.MeshPreview(
+        name, collection=target, scene=scene, place=lambda tmp: mesh_object.place_beside(tmp, sources)
+    )
+
+    def steps():
+        mesh, warnings = yield from _mesh_steps(
+            lambda: pattern_from_objects(sources, **pattern_parameters(options, scene)),
+            override_angle_degrees(options),
+            options.mesh_type,
+        )
+        preview.set_mesh(mesh)
+        pct = options.fold_percent / 100.0
+        out = yield from _solve_steps(mesh, None, pct, options.solver, warnings=warnings)
+        return lambda: (
+            create_fold(out, [bpy.data.objects[n] for n in source_names], coll_name, options, target, scene),
+            out,
+        )
+
+    return jobs.Job(name, "folding", steps(), preview)
+
+
+def create_fold(out: FoldOutcome, sources, coll_name, options: FoldOptions, target, scene=None) -> bpy.types.Object:
+    """Write a fold outcome as a new fold object (all or nothing) with its recipe; returns the object."""
+    coll = bpy.data.collections.get(coll_name) if coll_name else None
+    ob = None
+    try:
+        ob = mesh_object.create_fold_object(
+            out.mesh,
+            out.positions,
+            new_fold_name(sources, coll),
+            target,
+            fold_angles_sim=out.fold_angles,
+            strain_pct=out.strain_pct,
+            warp_deg=out.warp_deg,
+            scene=scene,
+        )
+        mesh_object.place_beside(ob, sources)  # beside the curves and earlier folds
+        props = ob.curved_fold_mesh
+        props.is_fold_mesh = True
+        props.source_collection = coll
+        for src in sources:
+            props.sources.add().object = src
+        props.interval, props.tolerance, props.mesh_type = options.interval, options.tolerance, options.mesh_type
+        props.use_fold_angle, props.fold_angle = options.use_fold_angle, options.fold_angle
+        props.fold_percent, props.solver = options.fold_percent, options.solver
+        store_figures(ob, out)
+    except Exception as exc:  # any write failure: remove what was made, leave the scene as it was
+        mesh_object.remove_fold_object(ob)
+        raise RuntimeError(f"writing the mesh failed: {exc}") from exc
+    return ob
+
+
+def current_positions(ob: bpy.types.Object, scene=None) -> np.ndarray:
+    """The fold object's vertex positions (mm) as stored (the ``position`` attribute, i.e. the Basis)."""
+    co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
+    ob.data.attributes["position"].data.foreach_get("vector", co)
+    return co.reshape(-1, 3).astype(np.float64) * mesh_object.mm_per_unit(scene)
+
+
+def same_mesh(a: FoldMesh, b: FoldMesh) -> bool:
+    """Whether two fold meshes are the same pattern mesh (flat vertices, triangles, crease targets)."""
+    return (
+        a.vertices.shape == b.vertices.shape
+        and a.triangles.shape == b.triangles.shape
+        and np.array_equal(a.triangles, b.triangles)
+        and np.allclose(a.vertices, b.vertices, rtol=0.0, atol=1e-9)
+        and np.array_equal(np.nan_to_num(a.fold_angles, nan=1e9), np.nan_to_num(b.fold_angles, nan=1e9))
+    )
+
+
+def refold_job(
+    ob: bpy.types.Object,
+    *,
+    rebuild: bool | None = None,
+    scene=None,
+    max_iterations: int | None = None,
+    warm_start: bool = False,
+    live: bool = False,
+) -> jobs.Job:
+    """The Re-fold (and live re-fold) operator's one scene call: a job that rebuilds the mesh from the source
+    curves (``rebuild`` True, or None with sources) or re-solves the stored mesh, warm-started from the current
+    shape with ``warm_start``; its commit writes the result and returns the :class:`FoldOutcome`.
+
+    A rebuild that yields the same mesh as the stored one keeps the mesh (no re-meshing). An explicit re-fold
+    clears a bake (stale); a ``live`` one keeps it, marked out of date (:func:`bake.mark_stale`)."""
     props = ob.curved_fold_mesh
     sources = source_objects(ob)
     if rebuild is None:
         rebuild = bool(sources)
-    if rebuild:
-        if not sources:
-            raise PatternError(f"'{ob.name}' has no source crease curves left to rebuild from")
-        pattern = pattern_from_objects(sources, **pattern_parameters(props, scene))
-        out = fold_from_pattern(pattern, props, max_iterations=max_iterations)
-    else:
-        start = None
-        if warm_start:
-            co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
-            ob.data.attributes["position"].data.foreach_get("vector", co)
-            start = co.reshape(-1, 3).astype(np.float64) * mesh_object.mm_per_unit(scene)
-        out = resolve_stored(ob, max_iterations=max_iterations, start=start)
-    bake.clear_bake(ob)
-    props.baked_frames = 0
+    if rebuild and not sources:
+        raise PatternError(f"'{ob.name}' has no source crease curves left to rebuild from")
+    name = ob.name
+    stored = mesh_object.read_fold_mesh(ob)
+    start = current_positions(ob, scene) if warm_start else None
+    pct = props.fold_percent / 100.0
+    method = props.solver
+    angle = override_angle_degrees(props)
+    positions_preview = jobs.PositionsPreview(ob, scene)
+    mesh_preview = jobs.MeshPreview(name, ob=ob, scene=scene)
+    previews = _Previews(positions_preview)
+
+    def steps():
+        mesh, warnings, remesh = stored, list(stored.warnings), False
+        if rebuild:
+            parameters = pattern_parameters(props, scene)
+            built, warnings = yield from _mesh_steps(
+                lambda: pattern_from_objects(sources, **parameters), angle, props.mesh_type
+            )
+            if not same_mesh(built, stored):
+                mesh, remesh = built, True
+                mesh_preview.set_mesh(mesh)
+                previews.active = mesh_preview
+        x0 = start if not remesh else (transfer_positions(stored, start, mesh) if start is not None else None)
+        out = yield from _solve_steps(
+            mesh, props, pct, method, start=x0, max_iterations=max_iterations, warnings=warnings
+        )
+        return lambda: write_refold(bpy.data.objects[name], out, remesh=remesh, keep_bake=live, scene=scene)
+
+    return jobs.Job(name, "live re-fold" if live else "re-folding", steps(), previews, live=live)
+
+
+class _Previews:
+    """The preview a re-fold shows: positions on the object, or a new mesh once the pattern was re-meshed."""
+
+    def __init__(self, active):
+        self.active = active
+
+    def show(self, positions):
+        self.active.show(positions)
+
+    def restore(self):
+        self.active.restore()
+
+
+def transfer_positions(old: FoldMesh, old_positions: np.ndarray, new: FoldMesh) -> np.ndarray | None:
+    """Warm start for a re-meshed pattern: each new vertex at the folded position of the point with its flat
+    coordinates on the old mesh (barycentric in the old triangle containing it, or the nearest old vertex).
+    Returns None when the sheets do not overlap (nothing to carry over)."""
+    if old_positions is None:
+        return None
+    tri = old.triangles
+    a, b, c = (old.vertices[tri[:, k], :2] for k in range(3))
+    p = new.vertices[:, :2]
+    out = np.empty((len(p), 3))
+    found = np.zeros(len(p), dtype=bool)
+    v0, v1 = b - a, c - a
+    den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+    ok = np.abs(den) > 1e-15
+    for lo in range(0, len(p), 256):
+        q = p[lo : lo + 256, None, :] - a[None]
+        u = (q[..., 0] * v1[None, :, 1] - v1[None, :, 0] * q[..., 1]) / np.where(ok, den, 1.0)
+        v = (v0[None, :, 0] * q[..., 1] - q[..., 0] * v0[None, :, 1]) / np.where(ok, den, 1.0)
+        inside = (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9) & ok[None]
+        has = inside.any(axis=1)
+        t = np.argmax(inside, axis=1)
+        rows = np.arange(len(t))
+        uu, vv = u[rows, t], v[rows, t]
+        pa, pb, pc = (old_positions[tri[t, k]] for k in range(3))
+        out[lo : lo + 256] = pa + uu[:, None] * (pb - pa) + vv[:, None] * (pc - pa)
+        found[lo : lo + 256] = has
+    if not found.any():
+        return None
+    for i in np.flatnonzero(~found):
+        out[i] = old_positions[np.argmin(np.sum((old.vertices[:, :2] - p[i]) ** 2, axis=1))]
+    return out
+
+
+def write_refold(ob: bpy.types.Object, out: FoldOutcome, *, remesh: bool, keep_bake: bool, scene=None) -> FoldOutcome:
+    """Write a re-fold's outcome onto ``ob`` (a new mesh when ``remesh``) and return it. A bake is kept and marked
+    out of date with ``keep_bake`` (live re-folds), else cleared."""
     results = {"fold_angles_sim": out.fold_angles, "strain_pct": out.strain_pct, "warp_deg": out.warp_deg}
-    if rebuild:
-        mesh_object.replace_fold_mesh(ob, out.mesh, out.positions, scene=scene, **results)
+    had_bake = bool(bake.baked_frames(ob))
+    if had_bake and not keep_bake:
+        bake.clear_bake(ob)
+        ob.curved_fold_mesh.baked_frames = 0
+        bake.forget_stale(ob)
+    if remesh:
+        base = bake.keep_stale_mesh(ob) if had_bake and keep_bake else None
+        try:
+            mesh_object.replace_fold_mesh(ob, out.mesh, out.positions, scene=scene, **results)
+        except Exception:
+            if base is not None:
+                bake.restore_stale_mesh(ob, base)
+            raise
+        if base is not None:
+            ob.data.name = base
     else:
         mesh_object.write_results(ob, out.mesh, out.positions, scene=scene, **results)
+    if had_bake and keep_bake:
+        bake.mark_stale(ob)
     store_figures(ob, out)
     return out

@@ -7,9 +7,12 @@ How it stays responsive:
   fold objects that use them (:func:`fold_objects_to_refold`) and calls :func:`schedule_refold`;
 * :func:`schedule_refold` debounces: it records the object and (re)arms one ``bpy.app.timers`` callback
   :data:`DEBOUNCE_S` after the last edit, so dragging a handle does not queue a fold per mouse move;
-* :func:`run_pending` (the timer body, a plain function tests call directly: timers never fire headless) re-folds
-  each pending object once, with the solver's iteration cap lowered (:data:`LIVE_MAX_ITERATIONS`), and catches
-  errors into the object's message.
+* :func:`run_pending` (the timer body, a plain function tests call directly: timers never fire headless) starts one
+  live re-fold job per pending object (``folding.refold_job``: warm-started from the current shape, settings-only
+  changes re-solve the stored mesh without re-meshing, the iteration cap lowered to :data:`LIVE_MAX_ITERATIONS`);
+  :func:`drive_slices` runs them in slices on a timer so the sheet moves while it solves; a new edit supersedes a
+  live job still running. Errors go into the object's message;
+* a live re-fold never deletes a bake: it is kept, muted and marked out of date (the sidebar offers Re-bake).
 
 The handler ignores the fold objects' own updates (their meshes and crease-display curves), so a re-fold does not
 trigger another.
@@ -22,7 +25,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import folding
+from . import folding, jobs
 
 DEBOUNCE_S = 0.25
 """Quiet time after the last edit before a live re-fold runs."""
@@ -84,34 +87,83 @@ def _timer() -> float | None:
     waiting = [t for t, _ in _pending.values() if now - t < DEBOUNCE_S]
     if waiting:
         return DEBOUNCE_S - (now - max(waiting))
-    run_pending()
+    run_pending(blocking=False)
     return None
 
 
-def run_pending() -> dict[str, str]:
-    """Re-fold every pending object once; returns ``{name: "ok" | error message}``. Errors are stored in the
-    object's ``last_message`` (shown in the sidebar) instead of raised: a half-edited curve must not break
-    the session."""
+def run_pending(*, blocking: bool = True) -> dict[str, str]:
+    """Start a live re-fold job for every pending object (superseding a live job still running on it); returns
+    ``{name: "ok" | "running" | error message}``.
+
+    ``blocking`` runs each job to its end here (tests, background mode); otherwise the jobs run in slices on a
+    timer (:func:`_drive`), so Blender stays responsive and the sheet moves as it solves. Errors are stored in the
+    object's ``last_message`` (shown in the sidebar) instead of raised: a half-edited curve must not break the
+    session."""
     results: dict[str, str] = {}
-    jobs = dict(_pending)
+    pending = dict(_pending)
     _pending.clear()
-    _guard["running"] = True
-    try:
-        for name, (_, rebuild) in jobs.items():
-            ob = bpy.data.objects.get(name)
-            if ob is None or not ob.curved_fold_mesh.is_fold_mesh:
-                continue
-            try:
-                folding.refold(
-                    ob, rebuild=None if rebuild else False, max_iterations=LIVE_MAX_ITERATIONS, warm_start=True
+    for name, (_, rebuild) in pending.items():
+        ob = bpy.data.objects.get(name)
+        if ob is None or not ob.curved_fold_mesh.is_fold_mesh:
+            continue
+        _guard["running"] = True
+        try:
+            job = jobs.start(
+                folding.refold_job(
+                    ob,
+                    rebuild=None if rebuild else False,
+                    max_iterations=LIVE_MAX_ITERATIONS,
+                    warm_start=True,
+                    live=True,
                 )
+            )
+            if blocking:
+                jobs.run_to_end(job)
                 results[name] = "ok"
-            except folding.engine_errors() as exc:
-                ob.curved_fold_mesh.last_message = f"live re-fold failed: {exc}"
-                results[name] = str(exc)
-    finally:
-        _guard["running"] = False
+            else:
+                _live_jobs[name] = job
+                results[name] = "running"
+        except jobs.JobBusyError:  # a Re-fold or Bake runs on it: try again after it
+            _pending[name] = (time.monotonic(), rebuild)
+            results[name] = "busy"
+        except folding.engine_errors() as exc:
+            ob.curved_fold_mesh.last_message = f"live re-fold failed: {exc}"
+            results[name] = str(exc)
+        finally:
+            _guard["running"] = False
+    if _live_jobs and not bpy.app.timers.is_registered(_drive):
+        bpy.app.timers.register(_drive, first_interval=0.0)
+    if _pending and not bpy.app.timers.is_registered(_timer):
+        bpy.app.timers.register(_timer, first_interval=DEBOUNCE_S)
     return results
+
+
+_live_jobs: dict[str, jobs.Job] = {}
+"""Live re-fold jobs running on the timer: fold object name → job."""
+
+
+def drive_slices(budget_ms: float = jobs.SLICE_MS) -> bool:
+    """One slice of every running live job (the timer body; tests call it directly). Returns True while any job
+    still runs."""
+    for name, job in list(_live_jobs.items()):
+        _guard["running"] = True
+        try:
+            if jobs.run_slice(job, budget_ms / max(len(_live_jobs), 1)):
+                _live_jobs.pop(name, None)
+        except folding.engine_errors() as exc:
+            _live_jobs.pop(name, None)
+            ob = bpy.data.objects.get(name)
+            if ob is not None:
+                ob.curved_fold_mesh.last_message = f"live re-fold failed: {exc}"
+        finally:
+            _guard["running"] = False
+        if not job.running:
+            _live_jobs.pop(name, None)
+    return bool(_live_jobs)
+
+
+def _drive() -> float | None:
+    return 0.01 if drive_slices() else None
 
 
 @persistent
@@ -132,6 +184,10 @@ def register_extra() -> None:
 def unregister_extra() -> None:
     if on_depsgraph_update in bpy.app.handlers.depsgraph_update_post:
         bpy.app.handlers.depsgraph_update_post.remove(on_depsgraph_update)
-    if bpy.app.timers.is_registered(_timer):
-        bpy.app.timers.unregister(_timer)
+    for timer in (_timer, _drive):
+        if bpy.app.timers.is_registered(timer):
+            bpy.app.timers.unregister(timer)
+    for job in _live_jobs.values():
+        jobs.cancel(job)
+    _live_jobs.clear()
     _pending.clear()

@@ -245,14 +245,17 @@ def test_bake_ten_frames_matches_solver(folded, extension):
     bake_mod = mod(extension, "scene.bake")
     fcurves = bake_mod._fcurves(ob.data.shape_keys)
     assert len(fcurves) == 10 and all(1 <= len(fc.keyframe_points) <= 3 for fc in fcurves)
-    # The same frames computed again, independently, with the same per-frame stepping.
-    ops_bake = mod(extension, "operators.bake")
-    job = ops_bake.BakeJob(ob, list(range(1, 11)))
-    np.testing.assert_allclose(job.percents, np.linspace(0, 1, 10))
-    job.step()
-    for f, expected in zip(range(1, 11), job.positions, strict=True):
+    # Each frame is the timeline cache's frame, and equals a cold solve at its percent (ramp 0 → 100 %).
+    cache = mod(extension, "scene.timeline").cache_for(ob)
+    solver_mod = mod(extension, "core.solve.solver")
+    mesh = cache.mesh
+    diag = float(np.linalg.norm(np.ptp(mesh.vertices_3d, axis=0)))
+    for f, pct in zip(range(1, 11), np.linspace(0, 1, 10), strict=True):
         scene.frame_set(f)
-        np.testing.assert_allclose(evaluated_mm(ob), expected, atol=5e-3)
+        np.testing.assert_allclose(evaluated_mm(ob), cache.frames[f].positions, atol=5e-3)
+        assert cache.frames[f].percent == pytest.approx(pct)
+        cold = solver_mod.Solver(mesh).solve(pct).positions
+        assert solver_mod.rigid_rms(cache.frames[f].positions, cold) / diag <= 1e-4
     assert bpy.ops.curved_fold.clear_bake() == {"FINISHED"}
     assert ob.data.shape_keys is None
 
@@ -264,8 +267,7 @@ def test_bake_follows_keyframed_fold_percent(folded, extension):
     props.keyframe_insert("fold_percent", frame=1)
     props.fold_percent = 60.0
     props.keyframe_insert("fold_percent", frame=5)
-    ops_bake = mod(extension, "operators.bake")
-    pct = ops_bake.percent_schedule(ob, [1, 3, 5, 7])
+    pct = mod(extension, "scene.bake").percent_schedule(ob, [1, 3, 5, 7])
     assert pct[0] == pytest.approx(0.2) and pct[2] == pytest.approx(0.6) and pct[3] == pytest.approx(0.6)
     assert 0.2 < pct[1] < 0.6
 
@@ -285,13 +287,16 @@ def test_dynamic_bake_and_invoke_in_background(folded, extension):
 
 
 def test_modal_bake_job_is_atomic_on_cancel(folded, extension):
-    """The modal path's work unit: frames computed in budgeted steps, nothing written until write()."""
+    """The modal path's work unit: frames computed in slices, shown in the viewport, nothing else written until the
+    commit; cancel puts the shown positions back."""
     ob, _, _ = folded
+    jobs = mod(extension, "scene.jobs")
     before = snapshot()
-    job = mod(extension, "operators.bake").BakeJob(ob, list(range(1, 6)))
-    job.step(budget_s=0.0)  # one frame per tick at least
-    assert 0 < len(job.positions) < 5 and 0 < job.progress < 1
-    del job  # Esc: the job is dropped
+    job = jobs.start(mod(extension, "scene.bake").bake_job(ob, list(range(1, 6))))
+    assert not jobs.run_slice(job, budget_ms=0.0)  # one unit per slice at least
+    assert 0 < job.progress.fraction < 1 and job.progress.n_frames == 5
+    jobs.cancel(job)  # Esc
+    assert job.state == "cancelled" and jobs.running_job(ob.name) is None
     assert snapshot() == before
 
 

@@ -1,0 +1,101 @@
+"""The modal/blocking runner the Fold, Re-fold and Bake operators share (the jobs themselves: ``scene.jobs``).
+
+``invoke`` (a click in the interface) starts the job and runs it in slices of about ``jobs.SLICE_MS`` on a window
+timer: the viewport shows the sheet folding, the status bar and the sidebar show progress, Esc or right-click
+cancels and leaves the scene as it was. ``execute`` (``EXEC_DEFAULT``: scripts, ``blender -b``, and ``invoke``
+without a window) runs the same job to its end in one call.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from ..scene import folding, jobs
+
+
+class JobOperator:
+    """Mix-in: subclasses define :meth:`make_job` (one scene-level call returning a ``jobs.Job``) and
+    :meth:`done` (report what the job's commit returned)."""
+
+    _timer = None
+    _job: jobs.Job | None = None
+    failure = "failed"
+
+    def make_job(self, context) -> jobs.Job:  # pragma: no cover - every subclass defines it
+        raise NotImplementedError
+
+    def done(self, context, result) -> None:  # pragma: no cover - every subclass defines it
+        raise NotImplementedError
+
+    def _fail(self, exc: BaseException) -> set[str]:
+        self.report({"ERROR"}, f"{self.failure}: {exc}")
+        return {"CANCELLED"}
+
+    def execute(self, context):
+        try:
+            job = jobs.start(self.make_job(context))
+            result = jobs.run_to_end(job)
+        except folding.engine_errors() as exc:
+            return self._fail(exc)
+        self.done(context, result)
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        try:
+            self._job = jobs.start(self.make_job(context))
+        except folding.engine_errors() as exc:
+            return self._fail(exc)
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.01, window=context.window)
+        wm.modal_handler_add(self)
+        self._status(context)
+        return {"RUNNING_MODAL"}
+
+    def _status(self, context) -> None:
+        job = self._job
+        text = job.status() + " — Esc to cancel"
+        if context.workspace is not None:
+            context.workspace.status_text_set(text)
+        for area in context.screen.areas if context.screen is not None else ():
+            if area.type == "VIEW_3D":
+                area.tag_redraw()
+
+    def _end_ui(self, context) -> None:
+        if self._timer is not None:
+            context.window_manager.event_timer_remove(self._timer)
+            self._timer = None
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+        for area in context.screen.areas if context.screen is not None else ():
+            if area.type == "VIEW_3D":
+                area.tag_redraw()
+
+    def modal(self, context, event):
+        job = self._job
+        if event.type in {"ESC", "RIGHTMOUSE"} and event.value == "PRESS":
+            self.cancel(context)
+            self.report({"WARNING"}, f"Cancelled {job.kind} '{job.owner}'; the scene is as it was")
+            return {"CANCELLED"}
+        if event.type != "TIMER" or event.timer is not self._timer:
+            return {"PASS_THROUGH"}
+        if not job.running:  # superseded or cancelled elsewhere
+            self._end_ui(context)
+            return {"CANCELLED"}
+        try:
+            ended = jobs.run_slice(job)
+        except folding.engine_errors() as exc:
+            self._end_ui(context)
+            return self._fail(exc)
+        if not ended:
+            self._status(context)
+            return {"RUNNING_MODAL"}
+        self._end_ui(context)
+        self.done(context, job.result)
+        return {"FINISHED"}
+
+    def cancel(self, context):
+        if self._job is not None:
+            jobs.cancel(self._job)
+        self._end_ui(context)

@@ -1,0 +1,340 @@
+"""Cancellable jobs: Fold, Re-fold, Live re-fold and Bake as generators of short slices of work.
+
+A job wraps a Python generator that does one unit of work per ``next`` (a mesh generation, a Newton iteration, a
+chunk of explicit steps, a frame) and yields a :class:`Progress`; when it is exhausted it *returns* a ``commit``
+callable that writes the result to the scene and returns what it wrote. So:
+
+* :func:`run_slice` advances a job for about ``budget_ms`` (at least one unit), shows the last positions reached in
+  the viewport (the sheet folds while the solver iterates) and, when the generator is done, commits;
+* :func:`cancel` closes the generator and restores what the preview changed, byte for byte (a snapshot taken when
+  the job started); nothing else was written, because only ``commit`` writes;
+* :func:`run_to_end` is the blocking path (``EXEC_DEFAULT``, scripts, ``blender -b``): the same slices, no budget.
+
+One job per folded object (:func:`start`): a live job is superseded by any new job on its object; any other
+running job makes a second one fail with :class:`JobBusyError` (one clear line for the user).
+
+Previews: :class:`PositionsPreview` moves an existing fold object's vertices (and its red/blue crease curves);
+:class:`MeshPreview` shows a new mesh (a fresh fold, or a rebuilt pattern) in a temporary datablock that is removed
+again. The modal operators (``operators/job_modal.py``) call :func:`run_slice` on a timer; the tests call it directly
+(timers and modal loops do not run headless).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Generator
+from dataclasses import dataclass
+from typing import Any
+
+import bpy
+import numpy as np
+
+from . import mesh_object
+
+SLICE_MS = 80.0
+"""Work per timer tick of a modal job (ms): one unit more than this is the longest a slice can take."""
+
+
+class JobBusyError(RuntimeError):
+    """A job is already running on this folded object (one job per object)."""
+
+
+@dataclass
+class Progress:
+    """Where a job is: its ``stage`` ("mesh", "model", "solve", "frame"), the solver iteration and residual, the
+    frame k of n (bakes), the fraction done, and positions (mm) worth showing (or None)."""
+
+    stage: str
+    iteration: int = 0
+    residual: float = math.nan
+    frame: int = 0
+    n_frames: int = 0
+    fraction: float = 0.0
+    positions: np.ndarray | None = None
+
+    def text(self, elapsed_s: float = 0.0) -> str:
+        """One status-bar line: iteration and residual, or frame k of n with the time left."""
+        if self.stage == "mesh":
+            return "meshing the pattern"
+        if self.stage == "model":
+            return "building the bar-and-hinge model"
+        if self.stage == "frame" and self.n_frames:
+            left = ""
+            if self.fraction > 0 and elapsed_s > 0:
+                left = f", {elapsed_s * (1.0 - self.fraction) / self.fraction:.0f} s left"
+            return f"frame {self.frame} of {self.n_frames}{left}"
+        res = f", residual {self.residual:.2e}" if math.isfinite(self.residual) else ""
+        return f"iteration {self.iteration}{res}"
+
+
+JobSteps = Generator[Progress, None, Callable[[], Any]]
+
+
+class PositionsPreview:
+    """Intermediate positions shown on an existing fold object; :meth:`restore` puts back the exact bytes.
+
+    Captured: the ``position`` attribute, the reference shape key, the mute flags of the shape keys (a bake would
+    hide the preview, so the preview mutes it) and the points of the crease-curve children."""
+
+    def __init__(self, ob: bpy.types.Object, scene: bpy.types.Scene | None = None):
+        self.ob_name = ob.name
+        self.scene = scene
+        me = ob.data
+        self.n = len(me.vertices)
+        self.position = np.empty(3 * self.n, dtype=np.float32)
+        me.attributes["position"].data.foreach_get("vector", self.position)
+        keys = me.shape_keys
+        self.reference = None
+        self.mutes: dict[str, bool] = {}
+        if keys is not None:
+            self.reference = np.empty(3 * self.n, dtype=np.float32)
+            keys.reference_key.points.foreach_get("co", self.reference)
+            self.mutes = {k.name: k.mute for k in keys.key_blocks}
+        self.children: dict[str, list[np.ndarray]] = {}
+        for name, child in mesh_object._crease_curve_objects(ob).items():
+            pts = []
+            for sp in child.data.splines:
+                co = np.empty(4 * len(sp.points), dtype=np.float32)
+                sp.points.foreach_get("co", co)
+                pts.append(co)
+            self.children[name] = pts
+        self.shown = False
+
+    @property
+    def ob(self) -> bpy.types.Object | None:
+        return bpy.data.objects.get(self.ob_name)
+
+    def show(self, positions_mm: np.ndarray) -> None:
+        ob = self.ob
+        if ob is None or len(positions_mm) != self.n:
+            return
+        keys = ob.data.shape_keys
+        if keys is not None:
+            for k in keys.key_blocks[1:]:
+                k.mute = True
+        mesh_object.update_positions(ob, positions_mm, scene=self.scene)
+        self.shown = True
+
+    def restore(self) -> None:
+        ob = self.ob
+        if ob is None or not self.shown:
+            return
+        me = ob.data
+        keys = me.shape_keys
+        if keys is not None and self.reference is not None:
+            keys.reference_key.points.foreach_set("co", self.reference)
+            for k in keys.key_blocks:
+                if k.name in self.mutes:
+                    k.mute = self.mutes[k.name]
+        me.attributes["position"].data.foreach_set("vector", self.position)
+        me.update()
+        for name, child in mesh_object._crease_curve_objects(ob).items():
+            for sp, co in zip(child.data.splines, self.children.get(name, ()), strict=False):
+                sp.points.foreach_set("co", co)
+            child.data.update_tag()
+        self.shown = False
+
+
+class MeshPreview:
+    """A mesh not in the scene yet (a new fold, or a rebuilt pattern) shown while it folds.
+
+    With ``ob`` (a rebuild) the object temporarily shows a preview mesh datablock instead of its own; without, a
+    temporary object is linked into ``collection``. :meth:`restore` removes every datablock it made."""
+
+    def __init__(
+        self,
+        name: str,
+        *,
+        ob: bpy.types.Object | None = None,
+        collection: bpy.types.Collection | None = None,
+        place=None,
+        scene: bpy.types.Scene | None = None,
+    ):
+        self.name = name
+        self.ob_name = ob.name if ob is not None else None
+        self.collection = collection
+        self.place = place
+        self.scene = scene
+        self.mesh = None
+        self.me_name: str | None = None
+        self.tmp_ob_name: str | None = None
+        self.old_me_name: str | None = None
+
+    def set_mesh(self, mesh) -> None:
+        """The FoldMesh the following :meth:`show` calls move (made once the pattern is meshed)."""
+        self.mesh = mesh
+
+    def _make(self, positions_mm: np.ndarray) -> None:
+        me = mesh_object._new_mesh_data(self.mesh, positions_mm, f"{self.name} (folding)", self.scene)
+        self.me_name = me.name
+        if self.ob_name is not None:
+            ob = bpy.data.objects[self.ob_name]
+            self.old_me_name = ob.data.name
+            for mat in ob.data.materials:
+                me.materials.append(mat)
+            ob.data = me
+        else:
+            ob = bpy.data.objects.new(f"{self.name} (folding)", me)
+            (self.collection or bpy.context.scene.collection).objects.link(ob)
+            self.tmp_ob_name = ob.name
+            if self.place is not None:
+                self.place(ob)
+
+    def show(self, positions_mm: np.ndarray) -> None:
+        if self.mesh is None or len(positions_mm) != self.mesh.n_vertices:
+            return
+        if self.me_name is None:
+            self._make(positions_mm)
+            return
+        me = bpy.data.meshes.get(self.me_name)
+        if me is None:
+            return
+        co = (np.asarray(positions_mm, dtype=np.float64) / mesh_object.mm_per_unit(self.scene)).astype(np.float32)
+        me.attributes["position"].data.foreach_set("vector", co.ravel())
+        me.update()
+
+    def restore(self) -> None:
+        if self.me_name is None:
+            return
+        if self.ob_name is not None and self.old_me_name is not None:
+            ob = bpy.data.objects.get(self.ob_name)
+            old = bpy.data.meshes.get(self.old_me_name)
+            if ob is not None and old is not None:
+                ob.data = old
+        if self.tmp_ob_name is not None:
+            tmp = bpy.data.objects.get(self.tmp_ob_name)
+            if tmp is not None:
+                bpy.data.objects.remove(tmp)
+        me = bpy.data.meshes.get(self.me_name)
+        if me is not None and me.users == 0:
+            bpy.data.meshes.remove(me)
+        self.me_name = self.tmp_ob_name = self.old_me_name = None
+
+
+class Job:
+    """One running piece of work on one folded object (``owner``: its name, or the name a new fold will take)."""
+
+    def __init__(self, owner: str, kind: str, steps: JobSteps, preview=None, *, live: bool = False):
+        self.owner = owner
+        self.kind = kind
+        self.steps = steps
+        self.preview = preview
+        self.live = live
+        self.state = "running"
+        self.progress = Progress("start")
+        self.result: Any = None
+        self.error: BaseException | None = None
+        self.slices = 0
+        self.units = 0
+        self.longest_slice_ms = 0.0
+        self.started = time.perf_counter()
+        self.elapsed_ms = 0.0
+
+    @property
+    def running(self) -> bool:
+        return self.state == "running"
+
+    def status(self) -> str:
+        """The status-bar line of this job."""
+        return f"Curved Fold: {self.kind} '{self.owner}' — {self.progress.text(self.elapsed_ms / 1e3)}"
+
+
+_jobs: dict[str, Job] = {}
+"""Running jobs: owner name → job (one per folded object)."""
+
+
+def running_job(owner: str) -> Job | None:
+    """The job running on ``owner`` (a fold object's name), if any."""
+    job = _jobs.get(owner)
+    return job if job is not None and job.running else None
+
+
+def start(job: Job) -> Job:
+    """Register ``job`` as its owner's one job. A running live job on the owner is cancelled (superseded); any
+    other running job there raises :class:`JobBusyError`."""
+    old = running_job(job.owner)
+    if old is not None and old is not job:
+        if not old.live:
+            raise JobBusyError(f"'{job.owner}' is busy ({old.kind}); wait for it or press Esc to cancel it")
+        cancel(old)
+    _jobs[job.owner] = job
+    return job
+
+
+def _end(job: Job, state: str) -> None:
+    job.state = state
+    job.elapsed_ms = 1e3 * (time.perf_counter() - job.started)
+    if _jobs.get(job.owner) is job:
+        del _jobs[job.owner]
+
+
+def run_slice(job: Job, budget_ms: float = SLICE_MS) -> bool:
+    """Advance ``job`` by units of work until ``budget_ms`` has passed (at least one unit); show the positions
+    reached; commit when the work is done. Returns True when the job has ended.
+
+    An error restores the preview, ends the job (``state == "failed"``, ``job.error``) and is raised again."""
+    if not job.running:
+        return True
+    t0 = time.perf_counter()
+    shown = None
+    commit = None
+    try:
+        while True:
+            try:
+                progress = next(job.steps)
+            except StopIteration as done:
+                commit = done.value
+                break
+            job.units += 1
+            job.progress = progress
+            if progress.positions is not None:
+                shown = progress.positions
+            if 1e3 * (time.perf_counter() - t0) >= budget_ms:
+                break
+        if commit is None:
+            if shown is not None and job.preview is not None:
+                job.preview.show(shown)
+        else:
+            if job.preview is not None:
+                job.preview.restore()
+            job.result = commit() if callable(commit) else commit
+    except BaseException as exc:
+        if job.preview is not None:
+            job.preview.restore()
+        job.error = exc
+        job.steps.close()
+        _end(job, "failed")
+        raise
+    finally:
+        job.slices += 1
+        job.longest_slice_ms = max(job.longest_slice_ms, 1e3 * (time.perf_counter() - t0))
+        job.elapsed_ms = 1e3 * (time.perf_counter() - job.started)
+    if commit is not None:
+        _end(job, "done")
+        return True
+    return False
+
+
+def cancel(job: Job) -> None:
+    """Stop ``job`` between slices: close its generator and restore what its preview changed. Nothing else was
+    written (only the commit writes), so the scene is as it was before the job."""
+    if not job.running:
+        return
+    job.steps.close()
+    if job.preview is not None:
+        job.preview.restore()
+    _end(job, "cancelled")
+
+
+def run_to_end(job: Job) -> Any:
+    """The blocking path: run ``job`` to its end (same slices, no budget) and return what its commit returned."""
+    while not run_slice(job, math.inf):
+        pass
+    return job.result
+
+
+def cancel_all() -> None:
+    """Cancel every running job (add-on unregistered, file loaded)."""
+    for job in list(_jobs.values()):
+        cancel(job)

@@ -1,0 +1,227 @@
+"""The timeline drives the fold: with Fold Percent (or other fold settings) keyframed, a frame change folds the mesh
+to that frame's percent — the design's "solver stepped per frame".
+
+* :class:`FrameCache` (one per fold object) keeps every solved frame (fold percent, settings, positions, θ
+  history). A new frame warm-starts from the nearest solved frame, so playback costs a few Newton iterations per
+  frame; the cache is dropped when the stored mesh changes (re-fold, live edit) and its entries are not reused when
+  the solver settings differ. Bakes read it and fill it (``bake.bake_job``): a frame is solved once.
+* :func:`on_frame_change` (``frame_change_post``) folds each animated fold object that is not showing a current
+  bake and has no job running. It is synchronous, as Blender needs the frame's shape before it draws or renders it.
+
+Quasi-static (equilibrium per frame, the fast solver) is what playback solves; the dynamic bake mode depends on
+the history of every earlier frame and is only baked.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Generator
+from dataclasses import dataclass
+
+import bpy
+import numpy as np
+from bpy.app.handlers import persistent
+
+from . import bake, folding, jobs, mesh_object
+from .fold_settings import settings_dict
+
+
+@dataclass
+class CachedFrame:
+    """One solved frame: the fold percent (fraction), the settings it was solved with, positions (mm), θ per hinge,
+    iterations, convergence and residual."""
+
+    percent: float
+    settings: str
+    positions: np.ndarray
+    theta: np.ndarray
+    iterations: int
+    converged: bool
+    residual: float
+
+
+def settings_key(props) -> str:
+    """The solver settings a frame depends on (stiffnesses, isometric, method) as a comparable string."""
+    return repr(sorted(settings_dict(props).items())) + props.solver
+
+
+def mesh_key(ob: bpy.types.Object) -> str:
+    """A digest of the stored pattern mesh (flat vertices, triangles, crease targets): the cache's validity."""
+    me = ob.data
+    h = hashlib.sha1()
+    for name, width, key in (("cf_flat", 2, "vector"), ("cf_fold_angle", 1, "value")):
+        attr = me.attributes.get(name)
+        if attr is None:
+            continue
+        n = len(attr.data) * width
+        buf = np.empty(n, dtype=np.float32)
+        attr.data.foreach_get(key, buf)
+        h.update(buf.tobytes())
+    tri = np.empty(len(me.loops), dtype=np.int32)
+    me.loops.foreach_get("vertex_index", tri)
+    h.update(tri.tobytes())
+    return h.hexdigest()
+
+
+class FrameCache:
+    """Solved frames of one fold object's stored mesh (see the module docstring)."""
+
+    def __init__(self, key: str, mesh):
+        self.key = key
+        self.mesh = mesh
+        self.frames: dict[int, CachedFrame] = {}
+        self._solvers: dict[str, object] = {}
+
+    def solver(self, props):
+        """The quasi-static solver for ``props``' settings (kept: its Hessian ordering is paid once)."""
+        from ..core.solve.solver import Solver
+
+        key = settings_key(props)
+        if key not in self._solvers:
+            method = "fast" if props.solver == "faithful" else props.solver
+            self._solvers = {key: Solver(self.mesh, folding.solver_settings(props), method)}
+        return self._solvers[key]
+
+    def get(self, frame: int, percent: float, props) -> CachedFrame | None:
+        """The cached frame if it was solved at this percent with these settings."""
+        hit = self.frames.get(int(frame))
+        if hit is not None and hit.percent == float(percent) and hit.settings == settings_key(props):
+            return hit
+        return None
+
+    def nearest(self, frame: int) -> CachedFrame | None:
+        """The solved frame nearest ``frame`` (the warm start of a new one)."""
+        if not self.frames:
+            return None
+        return self.frames[min(self.frames, key=lambda f: (abs(f - frame), f))]
+
+    def solve_steps(
+        self, frame: int, percent: float, props, *, frame_index: int = 0, n_frames: int = 0
+    ) -> Generator[jobs.Progress, None, CachedFrame]:
+        """Solve ``frame`` at ``percent`` from the nearest solved frame (or flat), one Newton iteration per unit;
+        caches and returns the frame."""
+        solver = self.solver(props)
+        near = self.nearest(frame)
+        start = near.positions if near is not None else None
+        theta = near.theta if near is not None else None
+        steps = solver.solve_steps(percent, start=start, theta_prev=theta)
+        while True:
+            try:
+                p = next(steps)
+            except StopIteration as done:
+                r = done.value
+                break
+            if n_frames:
+                fraction = (frame_index + min(p.iteration / 10.0, 0.9)) / n_frames
+                yield jobs.Progress("frame", p.iteration, p.residual, frame_index + 1, n_frames, fraction, p.positions)
+            else:
+                yield jobs.Progress("solve", p.iteration, p.residual, positions=p.positions)
+        if not np.all(np.isfinite(r.positions)):
+            raise FloatingPointError(f"frame {frame}: the solver returned non-finite positions")
+        entry = CachedFrame(
+            float(percent), settings_key(props), r.positions, r.theta, r.iterations, r.converged, r.residual
+        )
+        self.frames[int(frame)] = entry
+        return entry
+
+
+_caches: dict[str, FrameCache] = {}
+"""Fold object name → its frame cache."""
+
+
+def cache_for(ob: bpy.types.Object) -> FrameCache:
+    """``ob``'s frame cache, new (empty) when its stored mesh changed since the last one was made."""
+    key = mesh_key(ob)
+    cache = _caches.get(ob.name)
+    if cache is None or cache.key != key:
+        cache = FrameCache(key, mesh_object.read_fold_mesh(ob))
+        _caches[ob.name] = cache
+    return cache
+
+
+def clear(name: str | None = None) -> None:
+    """Forget the cache of the fold object ``name`` (all caches with None)."""
+    if name is None:
+        _caches.clear()
+    else:
+        _caches.pop(name, None)
+
+
+def animated(ob: bpy.types.Object) -> bool:
+    """Whether any fold setting of ``ob`` is keyframed (F-curves on ``curved_fold_mesh.*``)."""
+    if ob.animation_data is None or ob.animation_data.action is None:
+        return False
+    return any(fc.data_path.startswith("curved_fold_mesh.") for fc in bake._fcurves(ob))
+
+
+def percent_at(ob: bpy.types.Object, frame: float) -> float:
+    """Fold percent (fraction) at ``frame``: the keyframed value, else the set one."""
+    fc = bake.percent_fcurve(ob)
+    value = fc.evaluate(frame) if fc is not None else ob.curved_fold_mesh.fold_percent
+    return float(np.clip(value / 100.0, 0.0, 1.0))
+
+
+def driven(ob: bpy.types.Object) -> bool:
+    """Whether a frame change should fold ``ob``: a fold object with keyframed settings, not showing a current bake
+    (an out-of-date one is muted), no job running on it, quasi-static."""
+    props = getattr(ob, "curved_fold_mesh", None)
+    if props is None or not props.is_fold_mesh or ob.type != "MESH" or not animated(ob):
+        return False
+    if props.solver_mode == "DYNAMIC" or jobs.running_job(ob.name) is not None:
+        return False
+    return not (bake.baked_frames(ob) and not bake.is_stale(ob))
+
+
+def fold_to_frame(ob: bpy.types.Object, frame: int, *, scene=None) -> CachedFrame:
+    """Fold ``ob`` to ``frame``'s percent (from the cache, or solved warm from the nearest cached frame), write the
+    positions and return the frame."""
+    cache = cache_for(ob)
+    props = ob.curved_fold_mesh
+    percent = percent_at(ob, frame)
+    entry = cache.get(frame, percent, props)
+    if entry is None:
+        steps = cache.solve_steps(frame, percent, props)
+        while True:
+            try:
+                next(steps)
+            except StopIteration as done:
+                entry = done.value
+                break
+    mesh_object.update_positions(ob, entry.positions, scene=scene)
+    return entry
+
+
+@persistent
+def on_frame_change(scene, depsgraph=None) -> None:
+    """``frame_change_post``: fold every driven fold object of ``scene`` to the new frame. Errors go to the
+    object's message (a bad frame must not break playback)."""
+    for ob in list(scene.objects):
+        try:
+            if not driven(ob):
+                continue
+            fold_to_frame(ob, scene.frame_current, scene=scene)
+        except folding.engine_errors() as exc:
+            ob.curved_fold_mesh.last_message = f"frame {scene.frame_current}: {exc}"
+
+
+@persistent
+def on_load(*_args) -> None:
+    """A file was loaded: jobs and caches belong to the previous one."""
+    jobs.cancel_all()
+    _caches.clear()
+
+
+def register_extra() -> None:
+    if on_frame_change not in bpy.app.handlers.frame_change_post:
+        bpy.app.handlers.frame_change_post.append(on_frame_change)
+    if on_load not in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.append(on_load)
+
+
+def unregister_extra() -> None:
+    if on_frame_change in bpy.app.handlers.frame_change_post:
+        bpy.app.handlers.frame_change_post.remove(on_frame_change)
+    if on_load in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.remove(on_load)
+    jobs.cancel_all()
+    _caches.clear()

@@ -417,13 +417,26 @@ def current_positions(ob: bpy.types.Object, scene=None) -> np.ndarray:
 
 
 def same_mesh(a: FoldMesh, b: FoldMesh) -> bool:
-    """Whether two fold meshes are the same pattern mesh (flat vertices, triangles, crease targets)."""
-    return (
-        a.vertices.shape == b.vertices.shape
-        and a.triangles.shape == b.triangles.shape
-        and np.array_equal(a.triangles, b.triangles)
-        and np.allclose(a.vertices, b.vertices, rtol=0.0, atol=1e-9)
-        and np.array_equal(np.nan_to_num(a.fold_angles, nan=1e9), np.nan_to_num(b.fold_angles, nan=1e9))
+    """Whether two fold meshes are the same pattern mesh (flat vertices, triangles, crease targets), up to the
+    float32 rounding of a mesh stored on an object (1e-7 of the sheet's size, 1e-4° of a target)."""
+    if a.vertices.shape != b.vertices.shape or not np.array_equal(a.triangles, b.triangles):
+        return False
+    if a.edges.shape != b.edges.shape:
+        return False
+    size = max(float(np.ptp(a.vertices)), 1.0)
+    n = len(a.vertices)
+
+    def by_edge(m):  # edges in a canonical order: a stored mesh lists them in Blender's order
+        e = np.sort(m.edges, axis=1)
+        order = np.argsort(e[:, 0] * n + e[:, 1])
+        return e[order], np.nan_to_num(m.fold_angles[order], nan=1e9), np.asarray(m.assignments)[order]
+
+    (ea, fa, aa), (eb, fb, ab) = by_edge(a), by_edge(b)
+    return bool(
+        np.allclose(a.vertices, b.vertices, rtol=0.0, atol=1e-6 * size)
+        and np.array_equal(ea, eb)
+        and np.allclose(fa, fb, rtol=0.0, atol=1e-4)
+        and np.array_equal(aa, ab)
     )
 
 

@@ -1,0 +1,273 @@
+"""Cancellable jobs and the timeline (issue 13), headless: timers and modal loops do not run here, so the slice
+function is driven directly and the operators run through ``bpy.ops`` (EXEC_DEFAULT, the blocking path).
+
+* a slice advances a job (the viewport preview moves) and cancel restores the scene byte for byte, for a fresh
+  fold, a re-solve (with a bake on the object) and a re-mesh after a curve edit;
+* the sliced work equals the blocking work (the Newton iterations, the faithful integrator in chunks);
+* one job per folded object: a second job is refused, a new live edit supersedes a running live job;
+* keyframed Fold Percent: a frame change folds the mesh before any bake, equal to a cold solve at that percent;
+  the bake equals the cached frames;
+* Live on (and a live re-fold) keeps the bake, marked out of date; Re-bake makes it current.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from .test_operators import curved_pattern, evaluated_mm, mod, select_only, snapshot  # noqa: E402
+
+pytestmark = pytest.mark.usefixtures("extension")
+
+
+def exact_state() -> dict:
+    """``snapshot()`` plus the raw bytes (unrounded) of every mesh's positions and shape keys, the key mute flags,
+    the crease-curve points and the objects' ID properties: what "restored byte for byte" compares."""
+    state = snapshot()
+    for ob in bpy.data.objects:
+        extra = [sorted((k, repr(ob[k])) for k in ob.keys() if k.startswith("cf_"))]
+        if ob.type == "MESH":
+            me = ob.data
+            co = np.empty(3 * len(me.vertices), dtype=np.float32)
+            me.attributes["position"].data.foreach_get("vector", co)
+            extra.append(co.tobytes())
+            if me.shape_keys is not None:
+                for k in me.shape_keys.key_blocks:
+                    kc = np.empty(3 * len(me.vertices), dtype=np.float32)
+                    k.points.foreach_get("co", kc)
+                    extra.append((k.name, k.mute, k.value, kc.tobytes()))
+        if ob.type == "CURVE":
+            for sp in ob.data.splines:
+                pc = np.empty(4 * len(sp.points), dtype=np.float32)
+                sp.points.foreach_get("co", pc)
+                extra.append(pc.tobytes())
+        state[ob.name].append(extra)
+    state["mesh users"] = sorted((m.name, m.users, m.use_fake_user) for m in bpy.data.meshes)
+    return state
+
+
+@pytest.fixture
+def folded(extension, clean_scene):
+    border, crease = curved_pattern()
+    select_only([border, crease])
+    assert bpy.ops.curved_fold.fold() == {"FINISHED"}
+    return bpy.context.active_object, border, crease
+
+
+def positions_mm(ob) -> np.ndarray:
+    co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
+    ob.data.attributes["position"].data.foreach_get("vector", co)
+    return co.reshape(-1, 3).astype(np.float64) * 1000.0
+
+
+def test_fold_job_slices_preview_and_cancel_restores(extension, clean_scene):
+    jobs = mod(extension, "scene.jobs")
+    folding = mod(extension, "scene.folding")
+    border, crease = curved_pattern()
+    select_only([border, crease])
+    before = exact_state()
+    job = jobs.start(folding.fold_job([border, crease], None, folding.FoldOptions(), scene=clean_scene))
+    seen = []
+    for _ in range(6):  # mesh, model, then Newton iterations: the preview object appears and moves
+        assert not jobs.run_slice(job, budget_ms=0.0)
+        preview = bpy.data.objects.get("Border Folded (folding)")
+        if preview is not None:
+            seen.append(positions_mm(preview)[:, 2].copy())
+    assert job.progress.stage == "solve" and job.progress.iteration >= 1 and np.isfinite(job.progress.residual)
+    assert "iteration" in job.status() and len(seen) >= 2 and np.ptp(seen[-1]) > np.ptp(seen[0])
+    jobs.cancel(job)
+    assert exact_state() == before and bpy.data.objects.get("Border Folded (folding)") is None
+    # The same job run to its end (the blocking path) creates the fold object, equal to the operator's.
+    ob, out = jobs.run_to_end(jobs.start(folding.fold_job([border, crease], None, folding.FoldOptions())))
+    assert ob.name == "Border Folded" and bpy.data.objects.get("Border Folded (folding)") is None
+    np.testing.assert_allclose(positions_mm(ob), out.positions, atol=1e-3)
+    assert out.report["iterations"] == ob.curved_fold_mesh.last_iterations > 0
+
+
+def test_refold_job_cancel_restores_bake_and_positions(folded, extension):
+    """A re-solve at another percent on an object with a bake: the preview moves the sheet (and mutes the bake so it
+    shows); cancel restores positions, keys and mute flags exactly."""
+    ob, _, _ = folded
+    jobs = mod(extension, "scene.jobs")
+    folding = mod(extension, "scene.folding")
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 3
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    ob.curved_fold_mesh.fold_percent = 30.0
+    before = exact_state()
+    start_pos = positions_mm(ob)
+    job = jobs.start(folding.refold_job(ob, rebuild=False, warm_start=True))
+    for _ in range(3):
+        assert not jobs.run_slice(job, budget_ms=0.0)
+    assert np.abs(positions_mm(ob) - start_pos).max() > 1e-3  # the viewport shows the sheet moving
+    assert all(k.mute for k in ob.data.shape_keys.key_blocks if k.name.startswith("cf_frame_"))
+    jobs.cancel(job)
+    assert exact_state() == before
+
+
+def test_rebuild_job_cancel_restores_mesh(folded, extension):
+    """A re-mesh after a curve edit previews a new mesh datablock on the object; cancel gives the object its own
+    mesh back and removes the preview mesh."""
+    ob, _, crease = folded
+    jobs = mod(extension, "scene.jobs")
+    folding = mod(extension, "scene.folding")
+    crease.data.splines[0].bezier_points[1].handle_left = (0.08, 0.03, 0)
+    bpy.context.view_layer.update()
+    before = exact_state()
+    own = ob.data.name
+    job = jobs.start(folding.refold_job(ob, rebuild=True, warm_start=True))
+    for _ in range(5):
+        assert not jobs.run_slice(job, budget_ms=0.0)
+    assert ob.data.name != own  # the preview mesh is shown
+    jobs.cancel(job)
+    assert ob.data.name == own and exact_state() == before
+
+
+def test_one_job_per_object_and_live_supersedes(folded, extension):
+    ob, _, _ = folded
+    jobs = mod(extension, "scene.jobs")
+    folding = mod(extension, "scene.folding")
+    first = jobs.start(folding.refold_job(ob, rebuild=False))
+    with pytest.raises(jobs.JobBusyError, match="busy"):
+        jobs.start(folding.refold_job(ob, rebuild=False))
+    with pytest.raises(RuntimeError, match="busy"):  # the operator refuses with one line, scene unchanged
+        bpy.ops.curved_fold.refold()
+    jobs.cancel(first)
+    before = exact_state()
+    live1 = jobs.start(folding.refold_job(ob, rebuild=False, live=True, warm_start=True))
+    jobs.run_slice(live1, budget_ms=0.0)
+    live2 = jobs.start(folding.refold_job(ob, rebuild=False, live=True, warm_start=True))
+    assert live1.state == "cancelled" and exact_state() == before  # superseded: its preview undone
+    assert jobs.running_job(ob.name) is live2
+    jobs.run_to_end(live2)
+    assert live2.state == "done" and jobs.running_job(ob.name) is None
+
+
+def test_sliced_solves_equal_one_call(folded, extension):
+    """The units of a job are the solver's own: Newton iterations (fast) and chunks of explicit steps (faithful)
+    give the result of one ``Solver.solve`` call."""
+    ob, _, _ = folded
+    folding = mod(extension, "scene.folding")
+    solver_mod = mod(extension, "core.solve.solver")
+    mesh = mod(extension, "scene.mesh_object").read_fold_mesh(ob)
+
+    def drain(gen):
+        n = 0
+        while True:
+            try:
+                next(gen)
+                n += 1
+            except StopIteration as done:
+                return done.value, n
+
+    fast, n_fast = drain(folding.solve_progress(solver_mod.Solver(mesh), 0.7))
+    ref = solver_mod.Solver(mesh).solve(0.7)
+    assert n_fast == ref.iterations and np.array_equal(fast.positions, ref.positions)
+    settings = solver_mod.SolverSettings(max_steps=1500, tolerance=1e-9)
+    faithful, n_chunks = drain(folding.solve_progress(solver_mod.Solver(mesh, settings, "faithful"), 0.7, chunk_ms=0))
+    ref = solver_mod.Solver(mesh, settings, "faithful").solve(0.7)
+    assert n_chunks >= 10 and faithful.iterations == ref.iterations
+    np.testing.assert_allclose(faithful.positions, ref.positions, rtol=0, atol=1e-9)
+
+
+def keyframe_percent(ob, values: dict[int, float]) -> None:
+    props = ob.curved_fold_mesh
+    for frame, value in values.items():
+        props.fold_percent = value
+        props.keyframe_insert("fold_percent", frame=frame)
+
+
+def test_frame_change_folds_keyframed_percent_and_bake_equals_cache(folded, extension):
+    ob, _, _ = folded
+    scene = bpy.context.scene
+    timeline = mod(extension, "scene.timeline")
+    solver_mod = mod(extension, "core.solve.solver")
+    scene.frame_start, scene.frame_end = 1, 9
+    keyframe_percent(ob, {1: 10.0, 9: 90.0})
+    assert timeline.on_frame_change in bpy.app.handlers.frame_change_post
+    assert ob.data.shape_keys is None  # no bake
+    mesh = timeline.cache_for(ob).mesh
+    diag = float(np.linalg.norm(np.ptp(mesh.vertices_3d, axis=0)))
+    heights = []
+    for frame in (5, 2, 9, 7):
+        scene.frame_set(frame)  # frame_change_post folds the mesh to this frame's percent
+        pct = timeline.percent_at(ob, frame)
+        cold = solver_mod.Solver(mesh).solve(pct).positions
+        got = positions_mm(ob)
+        assert solver_mod.rigid_rms(got, cold) / diag <= 1e-4, frame
+        heights.append(np.ptp(got[:, 2]))
+    assert heights[1] < heights[0] < heights[3] < heights[2]  # frames 2 < 5 < 7 < 9 fold further
+    cache = timeline.cache_for(ob)
+    assert sorted(cache.frames) == [2, 5, 7, 9]
+    cached = {f: cache.frames[f].positions.copy() for f in cache.frames}
+    # Bake: the cached frames are taken as they are, the others solved (and cached).
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    assert sorted(cache.frames) == list(range(1, 10))
+    for frame in range(1, 10):
+        scene.frame_set(frame)
+        np.testing.assert_allclose(evaluated_mm(ob), cache.frames[frame].positions, atol=5e-3)
+        if frame in cached:
+            assert np.array_equal(cache.frames[frame].positions, cached[frame])
+    # With a current bake, frame changes show the bake and solve nothing.
+    assert not timeline.driven(ob)
+    # A settings change is not served from the cache: solved again with the new settings.
+    assert cache.get(5, timeline.percent_at(ob, 5), ob.curved_fold_mesh) is not None
+    ob.curved_fold_mesh.crease_stiffness = 1.4
+    assert cache.get(5, timeline.percent_at(ob, 5), ob.curved_fold_mesh) is None
+
+
+def test_live_keeps_the_bake_marked_out_of_date(folded, extension):
+    ob, _, crease = folded
+    scene = bpy.context.scene
+    live = mod(extension, "scene.live")
+    bake = mod(extension, "scene.bake")
+    scene.frame_start, scene.frame_end = 1, 4
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    keys_before = [k.name for k in ob.data.shape_keys.key_blocks]
+    assert bpy.ops.curved_fold.toggle_live() == {"FINISHED"} and ob.curved_fold_mesh.live
+    live.run_pending()  # turning Live on re-folds from the curves (unchanged: same mesh, no re-meshing)
+    assert [k.name for k in ob.data.shape_keys.key_blocks] == keys_before  # the bake is kept
+    # A settings-only live edit: re-solve without re-meshing, warm-started; the bake is kept, muted, out of date.
+    faces, mesh_name = len(ob.data.polygons), ob.data.name
+    ob.curved_fold_mesh.fold_percent = 50.0
+    assert live._pending[ob.name][1] is False
+    assert live.run_pending() == {ob.name: "ok"}
+    assert len(ob.data.polygons) == faces and ob.data.name == mesh_name
+    assert [k.name for k in ob.data.shape_keys.key_blocks] == keys_before
+    assert bake.is_stale(ob) and all(k.mute for k in ob.data.shape_keys.key_blocks[1:])
+    # A live curve edit re-meshes: the old mesh keeps the bake (fake user), the object gets the new mesh.
+    crease.data.splines[0].bezier_points[1].handle_left = (0.08, 0.03, 0)
+    live.schedule_refold(ob.name)
+    assert live.run_pending() == {ob.name: "ok"}
+    kept = bpy.data.meshes.get(ob[bake.STALE_MESH_KEY])
+    assert kept is not None and kept.use_fake_user and kept is not ob.data
+    assert [k.name for k in kept.shape_keys.key_blocks] == keys_before and bake.is_stale(ob)
+    kept_name = kept.name
+    # Re-bake: current again, the kept mesh is gone.
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    assert not bake.is_stale(ob) and bpy.data.meshes.get(kept_name) is None
+    assert bake.baked_frames(ob) == [1, 2, 3, 4]
+    ob.curved_fold_mesh.live = False
+    live._pending.clear()
+
+
+def test_live_jobs_run_in_slices(folded, extension):
+    """Interactive live re-folds run on a timer in slices (here driven by hand) and end with the re-fold done."""
+    ob, _, _ = folded
+    live = mod(extension, "scene.live")
+    jobs = mod(extension, "scene.jobs")
+    ob.curved_fold_mesh.live = True
+    live._pending.clear()
+    ob.curved_fold_mesh.fold_percent = 40.0
+    assert live.run_pending(blocking=False) == {ob.name: "running"}
+    assert jobs.running_job(ob.name) is not None
+    slices = 1
+    while live.drive_slices(budget_ms=0.0):
+        slices += 1
+    assert slices > 2 and jobs.running_job(ob.name) is None and ob.curved_fold_mesh.last_iterations > 0
+    ob.curved_fold_mesh.live = False
+    for timer in (live._timer, live._drive):
+        if bpy.app.timers.is_registered(timer):
+            bpy.app.timers.unregister(timer)

@@ -56,9 +56,7 @@ class CURVED_FOLD_OT_clear_bake(bpy.types.Operator):
 
     def execute(self, context):
         ob = context.active_object
-        n = bake.clear_bake(ob)
-        bake.forget_stale(ob)
-        ob.curved_fold_mesh.baked_frames = 0
+        n = bake.clear(ob)
         self.report({"INFO"}, f"Removed {n} baked frames from '{ob.name}'")
         return {"FINISHED"}
 

@@ -193,6 +193,15 @@ def bake_shape_keys(
     return [key_name(f) for f in frames]
 
 
+def clear(ob: bpy.types.Object) -> int:
+    """The Clear Bake operator's one scene call: remove the bake (keys, F-curves, an out-of-date mark and the mesh
+    it kept) and reset the baked-frame count; returns the frames removed."""
+    n = clear_bake(ob)
+    forget_stale(ob)
+    ob.curved_fold_mesh.baked_frames = 0
+    return n
+
+
 # ------------------------------------------------------------------------------------------ out-of-date bakes
 
 STALE_KEY = "cf_bake_stale"

@@ -228,6 +228,8 @@ class Job:
         self.slices = 0
         self.units = 0
         self.longest_slice_ms = 0.0
+        self.unit_ms: dict[str, float] = {}
+        """Longest unit of work per stage ("start" is the first unit: meshing for a fold or a rebuild)."""
         self.started = time.perf_counter()
         self.elapsed_ms = 0.0
 
@@ -281,11 +283,14 @@ def run_slice(job: Job, budget_ms: float = SLICE_MS) -> bool:
     commit = None
     try:
         while True:
+            tu = time.perf_counter()
             try:
                 progress = next(job.steps)
             except StopIteration as done:
                 commit = done.value
                 break
+            unit = job.progress.stage  # the label of the unit just done (a progress names the work that follows)
+            job.unit_ms[unit] = max(job.unit_ms.get(unit, 0.0), 1e3 * (time.perf_counter() - tu))
             job.units += 1
             job.progress = progress
             if progress.positions is not None:

@@ -4,7 +4,8 @@ to that frame's percent — the design's "solver stepped per frame".
 * :class:`FrameCache` (one per fold object) keeps every solved frame (fold percent, settings, positions, θ
   history). A new frame warm-starts from the nearest solved frame (extrapolated in the fold percent), so playback
   costs a few Newton iterations per frame (at most :data:`FRAME_MAX_ITERATIONS`); the cache is dropped when the
-  stored mesh changes (re-fold, live edit) and its entries are not reused when the solver settings differ. Bakes read it and fill it (``bake.bake_job``): a frame is solved once.
+  stored mesh changes (re-fold, live edit) and its entries are not reused when the solver settings differ. Bakes
+  read it and fill it (``bake.bake_job``): a frame is solved once.
 * :func:`on_frame_change` (``frame_change_post``) folds each animated fold object that is not showing a current
   bake and has no job running. It is synchronous, as Blender needs the frame's shape before it draws or renders it.
 

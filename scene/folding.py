@@ -302,12 +302,13 @@ def solve_progress(
 
 
 def _mesh_steps(pattern_fn, angle, mesh_type) -> Generator[jobs.Progress, None, Any]:
-    """Discretise and mesh (one unit: usually well under 100 ms, see docs/benchmarks.md); returns the FoldMesh and
-    the pattern's warnings."""
+    """Discretise (one unit), then triangulate with the ruling swaps (one unit); returns the FoldMesh and the
+    pattern's warnings. Each unit is usually under 100 ms; docs/benchmarks.md lists where it is not."""
     from ..core.mesh.build import build_mesh
     from ..core.pipeline import _with_angle
 
     pattern = _with_angle(override_fold_angles(pattern_fn(), angle), angle)  # Override applies to every crease
+    yield jobs.Progress("mesh")
     mesh = build_mesh(pattern, mesh_type=mesh_type)
     yield jobs.Progress("model")
     return mesh, list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings)

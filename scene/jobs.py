@@ -55,6 +55,8 @@ class Progress:
 
     def text(self, elapsed_s: float = 0.0) -> str:
         """One status-bar line: iteration and residual, or frame k of n with the time left."""
+        if self.stage == "start":
+            return "starting"
         if self.stage == "mesh":
             return "meshing the pattern"
         if self.stage == "model":
@@ -229,7 +231,8 @@ class Job:
         self.units = 0
         self.longest_slice_ms = 0.0
         self.unit_ms: dict[str, float] = {}
-        """Longest unit of work per stage ("start" is the first unit: meshing for a fold or a rebuild)."""
+        """Longest unit of work per stage ("start" is the first unit: discretising the curves for a fold or a
+        rebuild, "mesh" the triangulation, "model" the bar-and-hinge model, "solve" a solver iteration)."""
         self.started = time.perf_counter()
         self.elapsed_ms = 0.0
 

@@ -45,6 +45,9 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--fixtures", nargs="*", default=None)
     parser.add_argument("--frames", type=int, default=100)
+    parser.add_argument(
+        "--bake-from", choices=("svg", "import"), default="svg", help="bake the CLI's mesh or the imported curves'"
+    )
     parser.add_argument("--budget", type=float, default=None, help="slice budget in ms (default jobs.SLICE_MS)")
     args = parser.parse_args(argv)
     bpy.ops.wm.read_homefile(use_empty=True)
@@ -73,7 +76,18 @@ def main(argv=None) -> int:
         )
     if args.frames:
         bpy.ops.wm.read_homefile(use_empty=True)
-        ob, out, *_ = _fold(bpy, folding, jobs, FIXTURES / "CircularPleat-antiFacet.svg", math.inf)
+        if args.bake_from == "import":
+            ob, out, *_ = _fold(bpy, folding, jobs, FIXTURES / "CircularPleat-antiFacet.svg", math.inf)
+            n_faces = out.mesh.n_faces
+        else:  # the mesh the command line builds from the SVG (the 3,000 faces of the other tables)
+            from curved_fold.core.io.reader import read_pattern
+            from curved_fold.core.mesh.build import build_mesh
+            from curved_fold.scene import mesh_object
+
+            mesh = build_mesh(read_pattern(FIXTURES / "CircularPleat-antiFacet.svg"))
+            ob = mesh_object.create_fold_object(mesh, mesh.vertices_3d, "CircularPleat", bpy.context.scene.collection)
+            ob.curved_fold_mesh.is_fold_mesh = True
+            n_faces = mesh.n_faces
         frames = list(range(1, args.frames + 1))
         t0 = time.perf_counter()
         job = jobs.start(bake.bake_job(ob, frames))
@@ -86,7 +100,7 @@ def main(argv=None) -> int:
                 break
         summary = job.result
         print(
-            f"\nbake CircularPleat-antiFacet ({out.mesh.n_faces} faces), {len(frames)} frames 0 → 100 %: "
+            f"\nbake CircularPleat-antiFacet ({n_faces} faces, {args.bake_from}), {len(frames)} frames 0 → 100 %: "
             f"{time.perf_counter() - t0:.1f} s wall, {summary.iterations} Newton iterations "
             f"({summary.iterations / len(frames):.1f} per frame), longest slice {longest:.0f} ms, "
             f"unconverged frames {len(summary.unconverged)}",

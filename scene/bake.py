@@ -335,6 +335,9 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
     dynamic = props.solver_mode == "DYNAMIC"
     cache = timeline.cache_for(ob)
     mesh = cache.mesh
+    settings = folding.solver_settings(props)
+    steps_per_frame = int(props.steps_per_frame)
+    props = timeline.frozen_settings(props)  # the job solves with the settings of its start
     n = len(frames)
 
     def steps():
@@ -343,9 +346,9 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
         if dynamic:
             from ..core.solve.solver import Solver
 
-            solver = Solver(mesh, folding.solver_settings(props), "faithful")
+            solver = Solver(mesh, settings, "faithful")
             x, theta, v = mesh.vertices_3d.copy(), None, None
-            per_frame = int(props.steps_per_frame)
+            per_frame = steps_per_frame
             for i, f in enumerate(frames):
                 done = 0
                 while done < per_frame:

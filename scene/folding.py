@@ -314,12 +314,12 @@ def _mesh_steps(pattern_fn, angle, mesh_type) -> Generator[jobs.Progress, None, 
     return mesh, list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings)
 
 
-def _solve_steps(mesh, props, percent, method, *, start=None, max_iterations=None, warnings=None):
+def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None):
     """Build the model (one unit), then solve in units; returns the :class:`FoldOutcome`."""
     from ..core.pipeline import FoldRun, make_report
     from ..core.solve.solver import Solver
 
-    solver = Solver(mesh, solver_settings(props, max_iterations=max_iterations), method)
+    solver = Solver(mesh, settings, method)
     if method != "faithful":
         solver.assembler  # noqa: B018 - the Hessian ordering: part of this unit, not the first iteration
     yield jobs.Progress("solve")
@@ -370,7 +370,7 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
         )
         preview.set_mesh(mesh)
         pct = options.fold_percent / 100.0
-        out = yield from _solve_steps(mesh, None, pct, options.solver, warnings=warnings)
+        out = yield from _solve_steps(mesh, solver_settings(None), pct, options.solver, warnings=warnings)
         return lambda: (
             create_fold(out, [bpy.data.objects[n] for n in source_names], coll_name, options, target, scene),
             out,
@@ -468,6 +468,9 @@ def refold_job(
     pct = props.fold_percent / 100.0
     method = props.solver
     angle = override_angle_degrees(props)
+    settings = solver_settings(props, max_iterations=max_iterations)  # the job keeps the settings of its start
+    mesh_type = props.mesh_type
+    parameters = pattern_parameters(props, scene)
     positions_preview = jobs.PositionsPreview(ob, scene)
     mesh_preview = jobs.MeshPreview(name, ob=ob, scene=scene)
     previews = _Previews(positions_preview)
@@ -475,18 +478,15 @@ def refold_job(
     def steps():
         mesh, warnings, remesh = stored, list(stored.warnings), False
         if rebuild:
-            parameters = pattern_parameters(props, scene)
             built, warnings = yield from _mesh_steps(
-                lambda: pattern_from_objects(sources, **parameters), angle, props.mesh_type
+                lambda: pattern_from_objects(sources, **parameters), angle, mesh_type
             )
             if not same_mesh(built, stored):
                 mesh, remesh = built, True
                 mesh_preview.set_mesh(mesh)
                 previews.active = mesh_preview
         x0 = start if not remesh else (transfer_positions(stored, start, mesh) if start is not None else None)
-        out = yield from _solve_steps(
-            mesh, props, pct, method, start=x0, max_iterations=max_iterations, warnings=warnings
-        )
+        out = yield from _solve_steps(mesh, settings, pct, method, start=x0, warnings=warnings)
         return lambda: write_refold(bpy.data.objects[name], out, remesh=remesh, keep_bake=live, scene=scene)
 
     return jobs.Job(name, "live re-fold" if live else "re-folding", steps(), previews, live=live)

@@ -46,6 +46,14 @@ class CachedFrame:
     residual: float
 
 
+def frozen_settings(props):
+    """The solver settings of ``props`` as plain values (what a running job uses: later edits of the object's
+    settings, or the object's removal, do not reach into it)."""
+    from types import SimpleNamespace
+
+    return SimpleNamespace(**settings_dict(props), solver=str(props.solver))
+
+
 def settings_key(props) -> str:
     """The solver settings a frame depends on (stiffnesses, isometric, method) as a comparable string."""
     return repr(sorted(settings_dict(props).items())) + props.solver

@@ -78,7 +78,7 @@ class JobOperator:
             self.cancel(context)
             self.report({"WARNING"}, f"Cancelled {job.kind} '{job.owner}'; the scene is as it was")
             return {"CANCELLED"}
-        if event.type != "TIMER" or event.timer is not self._timer:
+        if event.type != "TIMER":
             return {"PASS_THROUGH"}
         if not job.running:  # superseded or cancelled elsewhere
             self._end_ui(context)

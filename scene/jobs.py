@@ -274,13 +274,15 @@ def _end(job: Job, state: str) -> None:
         del _jobs[job.owner]
 
 
-def run_slice(job: Job, budget_ms: float = SLICE_MS) -> bool:
-    """Advance ``job`` by units of work until ``budget_ms`` has passed (at least one unit); show the positions
-    reached; commit when the work is done. Returns True when the job has ended.
+def run_slice(job: Job, budget_ms: float | None = None) -> bool:
+    """Advance ``job`` by units of work until ``budget_ms`` (default :data:`SLICE_MS`) has passed (at least one
+    unit); show the positions reached; commit when the work is done. Returns True when the job has ended.
 
     An error restores the preview, ends the job (``state == "failed"``, ``job.error``) and is raised again."""
     if not job.running:
         return True
+    if budget_ms is None:
+        budget_ms = SLICE_MS
     t0 = time.perf_counter()
     shown = None
     commit = None

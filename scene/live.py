@@ -142,13 +142,14 @@ _live_jobs: dict[str, jobs.Job] = {}
 """Live re-fold jobs running on the timer: fold object name → job."""
 
 
-def drive_slices(budget_ms: float = jobs.SLICE_MS) -> bool:
+def drive_slices(budget_ms: float | None = None) -> bool:
     """One slice of every running live job (the timer body; tests call it directly). Returns True while any job
     still runs."""
     for name, job in list(_live_jobs.items()):
         _guard["running"] = True
         try:
-            if jobs.run_slice(job, budget_ms / max(len(_live_jobs), 1)):
+            budget = jobs.SLICE_MS if budget_ms is None else budget_ms
+            if jobs.run_slice(job, budget / max(len(_live_jobs), 1)):
                 _live_jobs.pop(name, None)
         except folding.engine_errors() as exc:
             _live_jobs.pop(name, None)

@@ -289,3 +289,42 @@ def test_transfer_positions_carries_the_shape_onto_a_new_mesh(folded, extension)
     got = folding.transfer_positions(mesh, moved, new)
     expect = np.c_[new.vertices, np.zeros(len(new.vertices))] @ rot.T + [1.0, 2.0, 3.0]
     np.testing.assert_allclose(got, expect, atol=1e-6)
+
+
+class _Event:
+    def __init__(self, type_, value="NOTHING"):
+        self.type, self.value = type_, value
+
+
+def test_modal_loop_runs_slices_and_esc_cancels(folded, extension, monkeypatch):
+    """The modal handler itself (``JobOperator.modal``, what a window timer drives), with events made here: timer
+    ticks run slices to the end; other events pass through; Esc cancels with the scene as it was."""
+    ob, _, _ = folded
+    jobs = mod(extension, "scene.jobs")
+    folding = mod(extension, "scene.folding")
+    job_modal = mod(extension, "operators.job_modal")
+    reports = []
+
+    class Runner(job_modal.JobOperator):
+        def report(self, kind, text):
+            reports.append((next(iter(kind)), text))
+
+        def done(self, context, result):
+            reports.append(("DONE", result))
+
+    monkeypatch.setattr(jobs, "SLICE_MS", 0.0)  # one unit per tick, so the small test job takes several
+    ob.curved_fold_mesh.fold_percent = 40.0
+    before = exact_state()
+    runner = Runner()
+    runner._job = jobs.start(folding.refold_job(ob, rebuild=False))
+    assert runner.modal(bpy.context, _Event("MOUSEMOVE")) == {"PASS_THROUGH"}
+    assert runner.modal(bpy.context, _Event("TIMER")) == {"RUNNING_MODAL"}
+    assert runner.modal(bpy.context, _Event("ESC", "PRESS")) == {"CANCELLED"}
+    assert runner._job.state == "cancelled" and exact_state() == before
+    assert reports[-1][0] == "WARNING" and "as it was" in reports[-1][1]
+    runner._job = jobs.start(folding.refold_job(ob, rebuild=False))
+    ticks = 0
+    while (state := runner.modal(bpy.context, _Event("TIMER"))) == {"RUNNING_MODAL"}:
+        ticks += 1
+    assert state == {"FINISHED"} and ticks >= 1 and reports[-1][0] == "DONE"
+    assert reports[-1][1].report["percent"] == pytest.approx(0.4)

@@ -314,18 +314,26 @@ def _mesh_steps(pattern_fn, angle, mesh_type) -> Generator[jobs.Progress, None, 
     return mesh, list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings)
 
 
-def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None):
-    """Build the model (one unit), then solve in units; returns the :class:`FoldOutcome`."""
+def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None, constraints=None):
+    """Build the model (one unit), then solve in units (with ``constraints``: pins and glue); returns the
+    :class:`FoldOutcome`."""
     from ..core.pipeline import FoldRun, make_report
     from ..core.solve.solver import Solver
 
-    solver = Solver(mesh, settings, method)
+    solver = Solver(mesh, settings, method, constraints)
     if method != "faithful":
         solver.assembler  # noqa: B018 - the Hessian ordering: part of this unit, not the first iteration
     yield jobs.Progress("solve")
     result = yield from solve_progress(solver, percent, start=start)
     report = make_report(
-        mesh, result, percent, mesh_type=mesh.mesh_type, solver=method, warnings=list(warnings or mesh.warnings)
+        mesh,
+        result,
+        percent,
+        mesh_type=mesh.mesh_type,
+        solver=method,
+        warnings=list(warnings or mesh.warnings),
+        constraints=constraints,
+        start=start,
     )
     return outcome_from_run(FoldRun(mesh, result, report), percent)
 
@@ -465,6 +473,9 @@ def refold_job(
     name = ob.name
     stored = mesh_object.read_fold_mesh(ob)
     start = current_positions(ob, scene) if warm_start else None
+    held = pins.constraints_from_object(ob, stored, scene)  # pins hold vertices where they are: start from the
+    if held is not None and start is None:  # shape shown
+        start = pins.current_positions(ob, scene)
     pct = props.fold_percent / 100.0
     method = props.solver
     angle = override_angle_degrees(props)
@@ -486,7 +497,8 @@ def refold_job(
                 mesh_preview.set_mesh(mesh)
                 previews.active = mesh_preview
         x0 = start if not remesh else (transfer_positions(stored, start, mesh) if start is not None else None)
-        out = yield from _solve_steps(mesh, settings, pct, method, start=x0, warnings=warnings)
+        constraints = None if remesh else held  # pins and glue name vertices of the stored mesh
+        out = yield from _solve_steps(mesh, settings, pct, method, start=x0, warnings=warnings, constraints=constraints)
         return lambda: write_refold(bpy.data.objects[name], out, remesh=remesh, keep_bake=live, scene=scene)
 
     return jobs.Job(name, "live re-fold" if live else "re-folding", steps(), previews, live=live)

@@ -182,102 +182,124 @@ def _strictly_crosses(o1, o2, eps):
     return ((o1 > eps) & (o2 < -eps)) | ((o1 < -eps) & (o2 > eps))
 
 
-def _decide_swaps(
-    vertices: np.ndarray,
-    triangles: np.ndarray,
-    triangle_face: np.ndarray,
-    segments: np.ndarray,
-    scorer: EndpointScorer,
-    max_valence: int,
-    max_swaps: int | None,
-) -> tuple[list[tuple[int, ...]], list[list[int]], dict[str, int]]:
-    """Run the greedy swap loop on a half-edge structure; return the swaps ``(a, c, b, d, t1, t2, f)`` in order (edge
-    ac becomes bd; t1, t2 the two triangle slots of the quad, f its crease-pattern face), the final triangles (CCW,
-    same slots as the input) and loop statistics.
-
-    Keys are integers: a directed edge x→y is ``x·n + y``, an undirected edge the code of (min, max) (so codes sort
-    like the vertex pairs, and heap ties break exactly as on pairs), a (vertex, face) pair ``v·n_faces + f``.
-    """
-    n = len(vertices)
-    t = len(triangles)
-    n_faces = int(triangle_face.max()) + 1 if t else 1
-    xy = vertices.tolist()
-    scale2 = float(np.sum((vertices.max(0) - vertices.min(0)) ** 2)) or 1.0
-    eps = 1e-12 * scale2
-    seg_code = np.unique(np.sort(segments, axis=1) @ np.array([n, 1], dtype=np.int64))
-    constrained = set(seg_code.tolist())
-
-    # half-edges h = 3 * triangle + k, from corner k to corner k + 1
+def _half_edge_arrays(triangles: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
+    """Half-edges h = 3·triangle + k, from corner k to corner k + 1: ``(org, dst, opp, code, twin)``, with ``opp``
+    the triangle's third vertex, ``code`` the directed-edge code ``org·n + dst`` and ``twin`` the opposite
+    half-edge (−1 on the hull)."""
     org = triangles.reshape(-1)
     dst = np.roll(triangles, -1, axis=1).reshape(-1)
-    opp = np.roll(triangles, -2, axis=1).reshape(-1)  # the triangle's third vertex, opposite the half-edge
+    opp = np.roll(triangles, -2, axis=1).reshape(-1)
     code = org * n + dst
     order = np.argsort(code)
     twin_code = dst * n + org
     pos = np.clip(np.searchsorted(code[order], twin_code), 0, len(code) - 1)
     twin = np.where(code[order][pos] == twin_code, order[pos], -1)
-    lo, hi = np.minimum(org, dst), np.maximum(org, dst)
-    is_seg = np.isin(lo * n + hi, seg_code)
+    return org, dst, opp, code, twin
 
-    # facet valence per (vertex, crease-pattern face): facet edges = interior non-segment edges, counted once
-    face_of_he = np.repeat(triangle_face, 3)
-    facet_once = (twin >= 0) & ~is_seg & (org < dst)
-    vf = np.concatenate([org[facet_once], dst[facet_once]]) * n_faces + np.tile(face_of_he[facet_once], 2)
-    vf_code, vf_count = np.unique(vf, return_counts=True)
-    valence: dict[int, int] = dict(zip(vf_code.tolist(), vf_count.tolist(), strict=True))
 
-    # first evaluation of every edge at once (each interior non-segment edge through its half-edge with org < dst)
-    stats = {"convex": 0, "valence": 0}
-    cand = np.flatnonzero(facet_once)
-    a_, c_ = org[cand], dst[cand]
-    b_, d_ = opp[cand], opp[twin[cand]]
-    nlo, nhi = np.minimum(b_, d_), np.maximum(b_, d_)
-    new_cost = scorer.costs(b_, d_)
-    old_cost = scorer.costs(a_, c_)
-    ok = ~np.isin(nlo * n + nhi, seg_code)
-    ok &= new_cost < old_cost
-    stats["convex"] += int(np.count_nonzero(ok))
-    pa, pb, pc, pd = vertices[a_], vertices[b_], vertices[c_], vertices[d_]
-    ok &= _strictly_crosses(_orient_v(pb, pd, pa), _orient_v(pb, pd, pc), eps)
-    ok &= _strictly_crosses(_orient_v(pa, pc, pb), _orient_v(pa, pc, pd), eps)
-    f_ = face_of_he[cand]
-    vb = _lookup(vf_code, vf_count, b_ * n_faces + f_)
-    vd = _lookup(vf_code, vf_count, d_ * n_faces + f_)
-    too_many = ok & ((vb > max_valence) | (vd > max_valence))
-    stats["valence"] += int(np.count_nonzero(too_many))
-    ok &= ~too_many
-    ok &= ~np.isin(b_ * n + d_, code) & ~np.isin(d_ * n + b_, code)
+class _SwapLoop:
+    """The greedy loop's mutable state: a half-edge structure over plain Python containers, the facet valence per
+    (vertex, crease-pattern face), the identity of every edge instance, and the priority queue of candidates.
 
-    # the mutable half-edge structure: directed edge -> triangle; an id per edge instance (a flipped edge dies)
-    tris = triangles.tolist()
-    tface = triangle_face.tolist()
-    owner: dict[int, int] = dict(zip(code.tolist(), (np.arange(3 * t) // 3).tolist(), strict=True))
-    by_vertex = np.argsort(org, kind="stable")
-    fan_start = np.searchsorted(org[by_vertex], np.arange(n + 1)).tolist()
-    fan_tris = (by_vertex // 3).tolist()
-    fans: dict[int, set[int]] = {}  # vertex -> its triangles, materialised on first use (before any change to it)
+    Keys are integers: a directed edge x→y is ``x·n + y``, an undirected edge the code of (min, max) (so codes sort
+    like the vertex pairs, and heap ties break exactly as on pairs), a (vertex, face) pair ``v·n_faces + f``.
+    """
 
-    def fan(v: int) -> set[int]:
-        s = fans.get(v)
+    def __init__(
+        self,
+        vertices: np.ndarray,
+        triangles: np.ndarray,
+        triangle_face: np.ndarray,
+        segments: np.ndarray,
+        scorer: EndpointScorer,
+        max_valence: int,
+    ) -> None:
+        n = self.n = len(vertices)
+        t = len(triangles)
+        self.n_faces = int(triangle_face.max()) + 1 if t else 1
+        self.vertices, self.scorer, self.max_valence = vertices, scorer, max_valence
+        self.xy = vertices.tolist()
+        scale2 = float(np.sum((vertices.max(0) - vertices.min(0)) ** 2)) or 1.0
+        self.eps = 1e-12 * scale2
+        self.seg_code = np.unique(np.sort(segments, axis=1) @ np.array([n, 1], dtype=np.int64))
+        self.constrained = set(self.seg_code.tolist())
+        self.he = _half_edge_arrays(triangles, n)
+        org, dst, _opp, code, twin = self.he
+        is_seg = np.isin(np.minimum(org, dst) * n + np.maximum(org, dst), self.seg_code)
+        self.face_of_he = np.repeat(triangle_face, 3)
+        # facet edges = interior non-segment edges, each once (through its half-edge with org < dst)
+        self.facet_once = (twin >= 0) & ~is_seg & (org < dst)
+        self.n_edges = int(np.count_nonzero(twin < 0)) + int(np.count_nonzero(twin >= 0)) // 2
+        vf = np.concatenate([org[self.facet_once], dst[self.facet_once]]) * self.n_faces + np.tile(
+            self.face_of_he[self.facet_once], 2
+        )
+        self.vf_code, self.vf_count = np.unique(vf, return_counts=True)
+        self.valence: dict[int, int] = dict(zip(self.vf_code.tolist(), self.vf_count.tolist(), strict=True))
+        self.stats = {"convex": 0, "valence": 0}
+        # the mutable half-edge structure: directed edge -> triangle; an id per edge instance (a flipped edge dies)
+        self.tris = triangles.tolist()
+        self.tface = triangle_face.tolist()
+        self.owner: dict[int, int] = dict(zip(code.tolist(), (np.arange(3 * t) // 3).tolist(), strict=True))
+        by_vertex = np.argsort(org, kind="stable")
+        self._fan_start = np.searchsorted(org[by_vertex], np.arange(n + 1)).tolist()
+        self._fan_tris = (by_vertex // 3).tolist()
+        self.fans: dict[int, set[int]] = {}  # vertex -> its triangles, materialised on first use
+        self.edge_id: dict[int, int] = {}
+        self.next_id = 0
+        self.heap: list[tuple[float, int, int, int, int]] = []
+        self.counter = 0
+
+    def fan(self, v: int) -> set[int]:
+        """The triangles around ``v`` (materialised before any change to them)."""
+        s = self.fans.get(v)
         if s is None:
-            s = fans[v] = set(fan_tris[fan_start[v] : fan_start[v + 1]])
+            s = self.fans[v] = set(self._fan_tris[self._fan_start[v] : self._fan_start[v + 1]])
         return s
 
-    edge_id: dict[int, int] = {}
-    next_id = [0]
-
-    def instance(key: int) -> int:
-        eid = edge_id.get(key)
+    def instance(self, key: int) -> int:
+        """The id of the current instance of edge ``key`` (a new id once the edge is flipped away and back)."""
+        eid = self.edge_id.get(key)
         if eid is None:
-            eid = edge_id[key] = next_id[0]
-            next_id[0] += 1
+            eid = self.edge_id[key] = self.next_id
+            self.next_id += 1
         return eid
 
-    cost_cache = scorer._cost
-    cost = scorer.cost
+    def push(self, cost: float, new_key: int, key: int, eid: int) -> None:
+        self.counter += 1
+        heapq.heappush(self.heap, (cost, new_key, key, self.counter, eid))
 
-    def evaluate(a: int, c: int) -> tuple[float, int] | None:
+    def queue_initial(self) -> None:
+        """Evaluate every facet edge at once (the same tests as :meth:`evaluate`, vectorised) and heapify."""
+        n, vertices, eps, stats = self.n, self.vertices, self.eps, self.stats
+        org, dst, opp, code, twin = self.he
+        cand = np.flatnonzero(self.facet_once)
+        a_, c_ = org[cand], dst[cand]
+        b_, d_ = opp[cand], opp[twin[cand]]
+        nlo, nhi = np.minimum(b_, d_), np.maximum(b_, d_)
+        new_cost = self.scorer.costs(b_, d_)
+        old_cost = self.scorer.costs(a_, c_)
+        ok = ~np.isin(nlo * n + nhi, self.seg_code)
+        ok &= new_cost < old_cost
+        stats["convex"] += int(np.count_nonzero(ok))
+        pa, pb, pc, pd = vertices[a_], vertices[b_], vertices[c_], vertices[d_]
+        ok &= _strictly_crosses(_orient_v(pb, pd, pa), _orient_v(pb, pd, pc), eps)
+        ok &= _strictly_crosses(_orient_v(pa, pc, pb), _orient_v(pa, pc, pd), eps)
+        f_ = self.face_of_he[cand]
+        vb = _lookup(self.vf_code, self.vf_count, b_ * self.n_faces + f_)
+        vd = _lookup(self.vf_code, self.vf_count, d_ * self.n_faces + f_)
+        too_many = ok & ((vb > self.max_valence) | (vd > self.max_valence))
+        stats["valence"] += int(np.count_nonzero(too_many))
+        ok &= ~too_many
+        ok &= ~np.isin(b_ * n + d_, code) & ~np.isin(d_ * n + b_, code)
+        for k in np.flatnonzero(ok).tolist():
+            key = int(a_[k]) * n + int(c_[k])
+            self.counter += 1
+            self.heap.append((float(new_cost[k]), int(nlo[k]) * n + int(nhi[k]), key, self.counter, self.instance(key)))
+        heapq.heapify(self.heap)
+
+    def evaluate(self, a: int, c: int) -> tuple[float, int] | None:
         """The new cost if edge ac (a < c) is a swap candidate, with the new edge's code; None otherwise."""
+        n, owner, tris, constrained = self.n, self.owner, self.tris, self.constrained
         if a * n + c in constrained:
             return None
         t1, t2 = owner.get(a * n + c), owner.get(c * n + a)
@@ -290,15 +312,17 @@ def _decide_swaps(
         key = bd[0] * n + bd[1]
         if key in constrained:
             return None
+        cost_cache = self.scorer._cost
         new = cost_cache.get(bd)
         if new is None:
-            new = cost(b, d)
+            new = self.scorer.cost(b, d)
         old = cost_cache.get((a, c))
         if old is None:
-            old = cost(a, c)
+            old = self.scorer.cost(a, c)
         if not new < old:
             return None
-        stats["convex"] += 1
+        self.stats["convex"] += 1
+        xy, eps = self.xy, self.eps
         pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
         o1, o2 = _orient(pb, pd, pa), _orient(pb, pd, pc)
         o3, o4 = _orient(pa, pc, pb), _orient(pa, pc, pd)
@@ -306,37 +330,17 @@ def _decide_swaps(
             return None
         if not ((o3 > eps and o4 < -eps) or (o3 < -eps and o4 > eps)):
             return None
-        f = tface[t1]
-        if valence.get(b * n_faces + f, 0) > max_valence or valence.get(d * n_faces + f, 0) > max_valence:
-            stats["valence"] += 1
+        f, n_faces, valence = self.tface[t1], self.n_faces, self.valence
+        if valence.get(b * n_faces + f, 0) > self.max_valence or valence.get(d * n_faces + f, 0) > self.max_valence:
+            self.stats["valence"] += 1
             return None
         if b * n + d in owner or d * n + b in owner:
             return None
         return new, key
 
-    heap: list[tuple[float, int, int, int, int]] = []
-    counter = 0
-    for k in np.flatnonzero(ok).tolist():
-        key = int(a_[k]) * n + int(c_[k])
-        counter += 1
-        heap.append((float(new_cost[k]), int(nlo[k]) * n + int(nhi[k]), key, counter, instance(key)))
-    heapq.heapify(heap)
-
-    swaps: list[tuple[int, ...]] = []
-    n_edges = int(np.count_nonzero(twin < 0)) + int(np.count_nonzero(twin >= 0)) // 2
-    cap = max_swaps if max_swaps is not None else 100 * max(1, n_edges)
-    while heap and len(swaps) < cap:
-        cost_q, key, old, _n, eid = heapq.heappop(heap)
-        if edge_id.get(old) != eid:  # the edge this entry was queued for has been flipped away
-            continue
-        a, c = divmod(old, n)
-        r = evaluate(a, c)
-        if r is None:
-            continue
-        if r[0] != cost_q:  # stale entry: its value changed since it was queued
-            counter += 1
-            heapq.heappush(heap, (r[0], r[1], old, counter, eid))
-            continue
+    def flip(self, a: int, c: int, new_key: int) -> tuple[int, ...]:
+        """Swap edge ac for bd in the half-edge structure, fans, edge instances and valences; the swap record."""
+        n, owner, tris, tface = self.n, self.owner, self.tris, self.tface
         t1, t2 = owner[a * n + c], owner[c * n + a]
         tr1, tr2 = tris[t1], tris[t2]
         b = tr1[0] + tr1[1] + tr1[2] - a - c
@@ -351,25 +355,29 @@ def _decide_swaps(
             owner[x * n + y] = ti
             owner[y * n + z] = ti
             owner[z * n + x] = ti
-        fan(a).discard(t2)
-        fan(c).discard(t1)
-        fan(b).add(t2)
-        fan(d).add(t1)
-        del edge_id[old]
-        instance(key)
-        swaps.append((a, c, b, d, t1, t2, f))
+        self.fan(a).discard(t2)
+        self.fan(c).discard(t1)
+        self.fan(b).add(t2)
+        self.fan(d).add(t1)
+        del self.edge_id[a * n + c]
+        self.instance(new_key)
+        valence, n_faces = self.valence, self.n_faces
         valence[a * n_faces + f] -= 1
         valence[c * n_faces + f] -= 1
         valence[b * n_faces + f] = valence.get(b * n_faces + f, 0) + 1
         valence[d * n_faces + f] = valence.get(d * n_faces + f, 0) + 1
-        # Re-evaluate what the swap can have changed: an edge's evaluation depends on its two triangles, on the
-        # facet valence of its two opposite vertices and on whether the edge between them exists. Triangles changed
-        # only in the quad, valence only at a, b, c, d, and the only edge created/removed joins b, d / a, c; so the
-        # edges to re-evaluate are those opposite a, b, c or d in a triangle around it (this includes the quad's
-        # five edges). Re-evaluating more would only queue duplicates of entries already in the heap.
+        return a, c, b, d, t1, t2, f
+
+    def requeue_around(self, quad: tuple[int, int, int, int]) -> None:
+        """Re-evaluate what a swap can have changed: an edge's evaluation depends on its two triangles, on the facet
+        valence of its two opposite vertices and on whether the edge between them exists. Triangles changed only in
+        the quad, valence only at its four vertices, and the only edge created/removed joins b, d / a, c; so the
+        edges to re-evaluate are those opposite a, b, c or d in a triangle around it (this includes the quad's five
+        edges). Re-evaluating more would only queue duplicates of entries already in the heap."""
+        n, tris = self.n, self.tris
         seen: set[int] = set()
-        for vi in (a, c, b, d):
-            for ti in fan(vi):
+        for vi in quad:
+            for ti in self.fan(vi):
                 x, y, z = tris[ti]
                 p, q = (y, z) if vi == x else ((z, x) if vi == y else (x, y))
                 if p > q:
@@ -378,11 +386,47 @@ def _decide_swaps(
                 if e in seen:
                     continue
                 seen.add(e)
-                r = evaluate(p, q)
+                r = self.evaluate(p, q)
                 if r is not None:
-                    counter += 1
-                    heapq.heappush(heap, (r[0], r[1], e, counter, instance(e)))
-    return swaps, tris, stats
+                    self.push(r[0], r[1], e, self.instance(e))
+
+
+def _decide_swaps(
+    vertices: np.ndarray,
+    triangles: np.ndarray,
+    triangle_face: np.ndarray,
+    segments: np.ndarray,
+    scorer: EndpointScorer,
+    max_valence: int,
+    max_swaps: int | None,
+) -> tuple[list[tuple[int, ...]], list[list[int]], dict[str, int]]:
+    """Run the greedy swap loop on a half-edge structure; return the swaps ``(a, c, b, d, t1, t2, f)`` in order (edge
+    ac becomes bd; t1, t2 the two triangle slots of the quad, f its crease-pattern face), the final triangles (CCW,
+    same slots as the input) and loop statistics.
+
+    Steps: evaluate every facet edge at once and queue the candidates by new cost; pop the cheapest, skip it if its
+    edge was flipped away, re-queue it if its value changed, otherwise swap and re-evaluate the edges around.
+    """
+    loop = _SwapLoop(vertices, triangles, triangle_face, segments, scorer, max_valence)
+    loop.queue_initial()
+    n, heap = loop.n, loop.heap
+    swaps: list[tuple[int, ...]] = []
+    cap = max_swaps if max_swaps is not None else 100 * max(1, loop.n_edges)
+    while heap and len(swaps) < cap:
+        cost_q, key, old, _n, eid = heapq.heappop(heap)
+        if loop.edge_id.get(old) != eid:  # the edge this entry was queued for has been flipped away
+            continue
+        a, c = divmod(old, n)
+        r = loop.evaluate(a, c)
+        if r is None:
+            continue
+        if r[0] != cost_q:  # stale entry: its value changed since it was queued
+            loop.push(r[0], r[1], old, eid)
+            continue
+        sw = loop.flip(a, c, key)
+        swaps.append(sw)
+        loop.requeue_around((a, c, sw[2], sw[3]))
+    return swaps, loop.tris, loop.stats
 
 
 def _lookup(codes: np.ndarray, counts: np.ndarray, query: np.ndarray) -> np.ndarray:
@@ -409,12 +453,6 @@ def ruling_swaps(
     ``max_swaps`` caps the loop (default: no practical cap; the loop terminates on its own).
     The swaps are decided on arrays (see the module docstring) and applied with ``bmesh.ops.rotate_edges``.
     """
-    # isort: off
-    import bpy  # noqa: F401  (bmesh needs bpy imported first in the bpy module)
-    import bmesh
-
-    # isort: on
-
     vertices = np.asarray(vertices, dtype=float)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     triangle_face = np.asarray(triangle_face, dtype=np.int64)
@@ -423,6 +461,22 @@ def ruling_swaps(
     swaps, decided, stats = _decide_swaps(vertices, triangles, triangle_face, segments, scorer, max_valence, max_swaps)
     if not swaps:
         return SwapResult(triangles.copy(), triangle_face.copy(), 0, stats["convex"], stats["valence"])
+
+    bm_tris = _apply_with_bmesh(vertices, triangles, swaps)
+    tris = np.asarray(decided, dtype=np.int64).reshape(-1, 3)
+    if not np.array_equal(_canonical(bm_tris), _canonical(tris)):  # pragma: no cover
+        raise RuntimeError("ruling swaps: the BMesh after rotation differs from the decided triangulation")
+    return SwapResult(tris, triangle_face.copy(), len(swaps), stats["convex"], stats["valence"])
+
+
+def _apply_with_bmesh(vertices: np.ndarray, triangles: np.ndarray, swaps: list[tuple[int, ...]]) -> np.ndarray:
+    """Apply the decided swaps to a ``bmesh`` of the input triangles with ``bmesh.ops.rotate_edges`` (one call per
+    level of independent swaps) and return the BMesh's triangles, for the check against the decided ones."""
+    # isort: off
+    import bpy  # noqa: F401  (bmesh needs bpy imported first in the bpy module)
+    import bmesh
+
+    # isort: on
 
     bm = bmesh.new()
     try:
@@ -455,10 +509,7 @@ def ruling_swaps(
         bm_tris = np.array([[v.index for v in face.verts] for face in bm.faces], dtype=np.int64).reshape(-1, 3)
     finally:
         bm.free()
-    tris = np.asarray(decided, dtype=np.int64).reshape(-1, 3)
-    if not np.array_equal(_canonical(bm_tris), _canonical(tris)):  # pragma: no cover
-        raise RuntimeError("ruling swaps: the BMesh after rotation differs from the decided triangulation")
-    return SwapResult(tris, triangle_face.copy(), len(swaps), stats["convex"], stats["valence"])
+    return bm_tris
 
 
 def _independent_runs(swaps: list[tuple[int, ...]]) -> list[list[tuple[int, ...]]]:

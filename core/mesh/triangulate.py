@@ -383,11 +383,21 @@ def _components(n: int, t1: np.ndarray, t2: np.ndarray) -> np.ndarray:
         lab = new
 
 
-def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> PlanarTriangulation:
-    """CDT of the sheet with every pattern segment as an edge, no Steiner points, outside and holes removed."""
-    pattern.validate()
-    backend = resolve_backend(backend)
-    warnings: list[str] = []
+@dataclass
+class _Segments:
+    """The pattern's segments on its used vertices: ``used`` pattern vertex of each point, the points, the segments
+    as point pairs (``key`` sorted per row, row k = pattern edge k) and ``segment_of`` {(i, j): pattern edge}."""
+
+    used: np.ndarray
+    points: np.ndarray
+    segments: np.ndarray
+    key: np.ndarray
+    segment_of: dict[tuple[int, int], int]
+
+
+def _pattern_segments(pattern: CreasePattern, warnings: list[str]) -> _Segments:
+    """Step 0: the pattern's vertices that lie on a segment, and its segments; refuse what cannot be meshed (loops,
+    two segments between one pair of vertices, no border, every vertex on one line)."""
     edges = pattern.edges
     if len(edges) == 0:
         raise PatternError("triangulation: the crease pattern has no segments")
@@ -416,44 +426,66 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
         )
     if len(pts) < 3 or np.all(np.abs(orient(pts[0], pts[1], pts[2:])) <= 1e-12 * pattern.size**2):
         raise PatternError("triangulation: all pattern vertices lie on one line; there is no sheet to mesh")
+    return _Segments(used, pts, segs, key, segment_of)
 
-    tris = _cdt_triangle(pts, segs) if backend == "triangle" else _cdt_mathutils(pts, segs)
+
+def _triangulate_hull(pattern: CreasePattern, sg: _Segments, backend: str) -> np.ndarray:
+    """Steps 1–2: the backend's CDT of the convex hull, CCW, every vertex present, made canonical (Lawson pass with
+    deterministic tie breaks, sorted)."""
+    pts = sg.points
+    tris = _cdt_triangle(pts, sg.segments) if backend == "triangle" else _cdt_mathutils(pts, sg.segments)
     area = orient(pts[tris[:, 0]], pts[tris[:, 1]], pts[tris[:, 2]])
     tris[area < 0] = tris[area < 0][:, [0, 2, 1]]
     tris = tris[np.abs(area) > 0]
     missing = np.setdiff1d(np.arange(len(pts)), np.unique(tris))
     if len(missing):
-        v = int(used[missing[0]])
+        v = int(sg.used[missing[0]])
         raise PatternError(
             f"triangulation: pattern vertex {v} at {pattern.vertices[v].round(4).tolist()} mm is not in the "
             "triangulation (it duplicates another vertex)"
         )
-    tris, _ = legalise(pts, tris, set(segment_of))
-    tris = _canonical_triangles(tris)
-    n_pts = np.int64(len(pts))
-    seg_code = np.unique(key[:, 0] * n_pts + key[:, 1])
-    org, dst, twin, is_seg = half_edges(tris, len(pts), seg_code)
-    # every constraint must be present
+    tris, _ = legalise(pts, tris, set(sg.segment_of))
+    return _canonical_triangles(tris)
+
+
+def _check_constraints(
+    pattern: CreasePattern, sg: _Segments, seg_code: np.ndarray, org: np.ndarray, dst: np.ndarray
+) -> None:
+    """Every pattern segment must be a triangle side (else it overlaps another or passes through a vertex)."""
+    n_pts = np.int64(len(sg.points))
     present = np.isin(seg_code, np.minimum(org, dst) * n_pts + np.maximum(org, dst))
     if not present.all():
         i, j = divmod(int(seg_code[np.flatnonzero(~present)[0]]), int(n_pts))
-        k = segment_of[(i, j)]
+        k = sg.segment_of[(i, j)]
         where = pattern.sources[pattern.edge_polyline[k]] if pattern.sources else "no source"
         raise PatternError(
             f"triangulation: pattern edge {k} ({where})"
             " is not an edge of the triangulation: it overlaps another segment or passes through a vertex"
         )
 
-    # regions: triangles connected across non-constraint edges (labelled by their smallest triangle)
-    t = len(tris)
-    tri_of = np.arange(3 * t) // 3
+
+def _paper_triangles(
+    pattern: CreasePattern,
+    sg: _Segments,
+    seg_code: np.ndarray,
+    he: tuple[np.ndarray, ...],
+    n_tris: int,
+    warnings: list[str],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Step 3: label the regions (triangles connected across non-constraint edges, labelled by their smallest
+    triangle) inside or outside the paper. Returns ``(keep_tri, region)``: the triangles on paper, and each
+    triangle's region."""
+    org, dst, twin, is_seg = he
+    n_pts = np.int64(len(sg.points))
+    tri_of = np.arange(3 * n_tris) // 3
     inner = (twin >= 0) & ~is_seg & (org < dst)
-    roots = _components(t, tri_of[inner], tri_of[twin[inner]])
+    roots = _components(n_tris, tri_of[inner], tri_of[twin[inner]])
     region_ids, region = np.unique(roots, return_inverse=True)
     n_regions = len(region_ids)
     hull = twin < 0
     outside_seed = set(region[tri_of[hull & ~is_seg]].tolist())
     adjacency: list[list[tuple[int, bool]]] = [[] for _ in range(n_regions)]
+    key = sg.key
     seg_sorted_k = np.argsort(key[:, 0] * n_pts + key[:, 1])  # pattern edge k is row k of key; codes are unique
     is_border_seg = pattern.assignments[seg_sorted_k] == "B"  # aligned with seg_code
     he_code = np.minimum(org, dst) * n_pts + np.maximum(org, dst)
@@ -492,35 +524,62 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
     keep_region = np.asarray(inside) == 1
     if not keep_region.any():
         raise PatternError("triangulation: no paper left: the border does not enclose any region")
-    keep_tri = keep_region[region]
-    tris = tris[keep_tri]
-    # renumber regions in order of first triangle (triangles are canonically sorted)
-    old = region[keep_tri]
-    _, first = np.unique(old, return_index=True)
-    order = np.argsort(first)
-    new_of_old = np.full(n_regions, -1, dtype=np.int64)
-    new_of_old[np.unique(old)[order]] = np.arange(len(order))
-    tri_region = new_of_old[old]
+    return keep_region[region], region
 
-    # drop vertices no longer used (only outside the paper), keep order
+
+def _renumber_regions(region: np.ndarray) -> tuple[np.ndarray, int]:
+    """Regions numbered in order of their first triangle (triangles are canonically sorted): ``(index, count)``."""
+    _, first = np.unique(region, return_index=True)
+    order = np.argsort(first)
+    new_of_old = np.full(int(region.max()) + 1 if len(region) else 0, -1, dtype=np.int64)
+    new_of_old[np.unique(region)[order]] = np.arange(len(order))
+    return new_of_old[region], len(order)
+
+
+def _drop_unused_vertices(
+    sg: _Segments, tris: np.ndarray, warnings: list[str]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[tuple[int, int], int]]:
+    """Vertices no longer used (only outside the paper) dropped, order kept: ``(points, vertex_source, triangles,
+    segment_of)`` renumbered."""
+    pts = sg.points
     used2 = np.unique(tris)
     if len(used2) < len(pts):
         warnings.append(f"triangulation: {len(pts) - len(used2)} vertex(es) outside the paper dropped")
     remap2 = np.full(len(pts), -1, dtype=np.int64)
     remap2[used2] = np.arange(len(used2))
-    tris = remap2[tris]
-    pts2 = pts[used2]
-    vertex_source = used[used2]
-    seg_ij = np.array(list(segment_of), dtype=np.int64).reshape(-1, 2)
-    seg_k = np.fromiter(segment_of.values(), dtype=np.int64, count=len(segment_of))
+    seg_ij = np.array(list(sg.segment_of), dtype=np.int64).reshape(-1, 2)
+    seg_k = np.fromiter(sg.segment_of.values(), dtype=np.int64, count=len(sg.segment_of))
     ra, rb = remap2[seg_ij[:, 0]], remap2[seg_ij[:, 1]]
     keep = (ra >= 0) & (rb >= 0)
     lo2, hi2 = np.minimum(ra, rb)[keep].tolist(), np.maximum(ra, rb)[keep].tolist()
     seg2 = dict(zip(zip(lo2, hi2, strict=True), seg_k[keep].tolist(), strict=True))
+    return pts[used2], sg.used[used2], remap2[tris], seg2
+
+
+def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> PlanarTriangulation:
+    """CDT of the sheet with every pattern segment as an edge, no Steiner points, outside and holes removed.
+
+    The steps of the module docstring: the pattern's segments (:func:`_pattern_segments`), the CDT of their hull made
+    canonical (:func:`_triangulate_hull`), the constraint check, the paper regions (:func:`_paper_triangles`), then
+    renumbering and the crease-pattern face loops.
+    """
+    pattern.validate()
+    backend = resolve_backend(backend)
+    warnings: list[str] = []
+    sg = _pattern_segments(pattern, warnings)
+    tris = _triangulate_hull(pattern, sg, backend)
+    n_pts = np.int64(len(sg.points))
+    seg_code = np.unique(sg.key[:, 0] * n_pts + sg.key[:, 1])
+    he = half_edges(tris, len(sg.points), seg_code)
+    _check_constraints(pattern, sg, seg_code, he[0], he[1])
+    keep_tri, region = _paper_triangles(pattern, sg, seg_code, he, len(tris), warnings)
+    tris = tris[keep_tri]
+    tri_region, n_faces = _renumber_regions(region[keep_tri])
+    pts2, vertex_source, tris, seg2 = _drop_unused_vertices(sg, tris, warnings)
 
     seg2_code = np.array(sorted(i * len(pts2) + j for i, j in seg2), dtype=np.int64)
     faces, face_loops_, simple = [], [], []
-    for loops in face_loops(pts2, tris, tri_region, len(order), seg2_code):
+    for loops in face_loops(pts2, tris, tri_region, n_faces, seg2_code):
         loops = _outer_first(pts2, loops)
         faces.append(np.asarray(loops[0], dtype=np.int64))
         face_loops_.append([np.asarray(lp, dtype=np.int64) for lp in loops])

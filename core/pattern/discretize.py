@@ -28,6 +28,7 @@ there is no border). See :data:`MERGE_PER_150` for the merge tolerance.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -505,22 +506,20 @@ def sheet_size(curves: list[CreaseCurve]) -> float:
     return float(np.max(allp.max(axis=0) - allp.min(axis=0)))
 
 
-def discretize(
-    curves: list[CreaseCurve],
-    *,
-    interval: float | None = None,
-    tolerance: float | None = None,
-    merge_tolerance: float | None = None,
-) -> CreasePattern:
-    """Discretise crease curves into a planar :class:`CreasePattern` (paper §3.1; see the module docstring).
+@dataclass
+class _Pieces:
+    """Drawn segments as straight pieces ``a[i]→b[i]`` with their per-piece attributes (indexed by ``attrs`` later)."""
 
-    ``None`` parameters take the scale-aware defaults (:func:`default_parameters` of :func:`sheet_size`). The
-    result's ``sources`` has one entry per curve (``edge_polyline`` indexes it), ``edge_from_curve`` marks pieces
-    of non-straight segments, and ``warnings`` lists capped parameters, duplicate segments with different
-    assignments, removed outside pieces and open borders.
-    """
-    if not curves:
-        raise PatternError("crease pattern: no curves to discretise")
+    a: np.ndarray
+    b: np.ndarray
+    polyline: np.ndarray  # index into ``sources`` (the drawn curve)
+    from_curve: np.ndarray  # the piece discretises a curved segment
+    assignment: np.ndarray
+    fold_angle: np.ndarray
+
+
+def _check_coordinates(curves: list[CreaseCurve]) -> None:
+    """Reject non-finite and absurdly large coordinates (one clear line naming the curve)."""
     for c in curves:
         for seg in c.segments:
             if not np.all(np.isfinite(seg.points)):
@@ -533,6 +532,16 @@ def discretize(
                     f"{c.source or 'curve'}: coordinate {big:.3g} mm in a {seg.kind} segment is beyond "
                     f"±{MAX_COORDINATE_MM:g} mm (100 km); check the file's units, width/height and viewBox"
                 )
+
+
+def _resolve_parameters(
+    curves: list[CreaseCurve],
+    interval: float | None,
+    tolerance: float | None,
+    merge_tolerance: float | None,
+    warnings: list[str],
+) -> tuple[float, float, float]:
+    """Step 0: the scale-aware defaults for missing parameters, validated; interval raised to the merge tolerance."""
     size = sheet_size(curves)
     if 0.0 < size < MIN_SHEET_MM:
         raise PatternError(
@@ -548,8 +557,6 @@ def discretize(
             raise PatternError(f"discretisation: {name} must be a positive number of mm, got {value!r}")
     if not (merge_tolerance >= 0 and math.isfinite(merge_tolerance)):
         raise PatternError(f"discretisation: merge tolerance must be ≥ 0 mm, got {merge_tolerance!r}")
-    warnings: list[str] = []
-    sources = [c.source or f"curve {k}" for k, c in enumerate(curves)]
     if interval < merge_tolerance:
         # pieces shorter than the merge tolerance are welded together again (curves) or left as slivers below it
         # (border subdivision, which runs after merging): never useful, and it multiplies the vertex count
@@ -566,8 +573,15 @@ def discretize(
             f"tolerance; used {tolerance_floor:g} mm"
         )
         tolerance = tolerance_floor
+    return interval, tolerance, merge_tolerance
 
-    # -- explosion guard: estimate the count first, enlarge the parameters until the estimate is under the limit
+
+def _guard_explosion(
+    curves: list[CreaseCurve], interval: float, tolerance: float, warnings: list[str]
+) -> tuple[float, float]:
+    """Explosion guard: estimate the segment count first, enlarge the parameters until the estimate is under the
+    limit."""
+
     def estimated_count(interval: float, tolerance: float) -> float:
         estimate = 0.0
         for c in curves:
@@ -595,8 +609,18 @@ def discretize(
             f"{int(first_estimate)} segments (limit {MAX_SEGMENTS}); used interval {interval:.4g} mm and tolerance "
             f"{tolerance:.4g} mm"
         )
+    return interval, tolerance
 
-    # -- polylines, borders first (they win merges and duplicates)
+
+def _discretise_curves(
+    curves: list[CreaseCurve],
+    sources: list[str],
+    interval: float,
+    tolerance: float,
+    merge_tolerance: float,
+    warnings: list[str],
+) -> _Pieces:
+    """Steps 1–2: every drawn segment as polyline pieces, borders first (they win merges and duplicates)."""
     order = sorted(range(len(curves)), key=lambda k: PRIORITY.get(curves[k].assignment, 5))
     seg_a, seg_b, polyline, from_curve = [], [], [], []
     total = 0
@@ -630,19 +654,28 @@ def discretize(
             f"on {_describe_sources(sources, np.array(below_merge))}: points closer than that are merged, so those "
             "curves are followed less closely than asked; pass a larger --tolerance"
         )
-    a = np.concatenate(seg_a)
-    b = np.concatenate(seg_b)
     edge_poly = np.concatenate(polyline).astype(np.int64)
-    edge_curve = np.concatenate(from_curve).astype(bool)
-    assign = np.array([curves[k].assignment for k in edge_poly.tolist()], dtype="<U1")
-    angle = np.array(
-        [np.nan if curves[k].fold_angle is None else float(curves[k].fold_angle) for k in edge_poly.tolist()]
+    return _Pieces(
+        a=np.concatenate(seg_a),
+        b=np.concatenate(seg_b),
+        polyline=edge_poly,
+        from_curve=np.concatenate(from_curve).astype(bool),
+        assignment=np.array([curves[k].assignment for k in edge_poly.tolist()], dtype="<U1"),
+        fold_angle=np.array(
+            [np.nan if curves[k].fold_angle is None else float(curves[k].fold_angle) for k in edge_poly.tolist()]
+        ),
     )
 
-    # -- planar arrangement
+
+def _planar_arrangement(
+    pieces: _Pieces, merge_tolerance: float, sources: list[str]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Step 3: merge close vertices, split crossings (X) and T-junctions, drop zero-length pieces.
+
+    Returns ``(verts, edges, attrs)``, ``attrs`` indexing the pieces' attribute arrays."""
     # interleaved (start, end, start, end, ...) so "first representative" follows the drawing order
-    verts, idx = _merge_points(np.stack([a, b], axis=1).reshape(-1, 2), merge_tolerance)
-    m = len(a)
+    verts, idx = _merge_points(np.stack([pieces.a, pieces.b], axis=1).reshape(-1, 2), merge_tolerance)
+    m = len(pieces.a)
     edges = idx.reshape(m, 2)
     attrs = np.arange(m)  # index into the per-segment attribute arrays
     for _ in range(4):
@@ -660,10 +693,16 @@ def discretize(
     if len(edges) == 0:
         raise PatternError(
             f"crease pattern: every segment is shorter than the merge tolerance {merge_tolerance:g} mm "
-            f"(sources: {_describe_sources(sources, edge_poly)})"
+            f"(sources: {_describe_sources(sources, pieces.polyline)})"
         )
+    return verts, edges, attrs
 
-    # -- duplicates: keep the highest-priority assignment, warn when they disagree
+
+def _remove_duplicates(
+    edges: np.ndarray, attrs: np.ndarray, pieces: _Pieces, sources: list[str], warnings: list[str]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Step 3 (end): of coinciding pieces keep the highest-priority assignment, warn when they disagree."""
+    assign, angle, edge_poly = pieces.assignment, pieces.fold_angle, pieces.polyline
     key = np.sort(edges, axis=1)
     prio = np.array([PRIORITY[x] for x in assign[attrs].tolist()], dtype=np.int64)
     o = np.lexsort((np.arange(len(edges)), prio, key[:, 1], key[:, 0]))
@@ -696,56 +735,94 @@ def discretize(
                 f"{sources[edge_poly[x]]} ({angle[x]:g}°) over {sources[edge_poly[y]]} ({angle[y]:g}°), ..."
             )
     winners = np.sort(winners)
-    edges, attrs = edges[winners], attrs[winners]
+    return edges[winners], attrs[winners]
 
-    # -- crease pieces outside a closed border
+
+def _clip_to_border(
+    verts: np.ndarray,
+    edges: np.ndarray,
+    attrs: np.ndarray,
+    pieces: _Pieces,
+    sources: list[str],
+    warnings: list[str],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Step 4: refuse a self-crossing border, warn about an open one, remove crease pieces outside a closed one."""
+    assign, edge_poly = pieces.assignment, pieces.polyline
     is_b = assign[attrs] == "B"
-    if is_b.any():
-        deg = np.bincount(edges[is_b].ravel(), minlength=len(verts))
-        crossing = np.flatnonzero((deg >= 4) & (deg % 2 == 0))
-        if len(crossing):
-            # four or more border pieces at one point: the outline crosses or touches itself, so which side is
-            # paper is ambiguous (a figure-eight outline); the designer must redraw it
-            at_b = is_b & np.isin(edges, crossing).any(axis=1)
-            pts = ", ".join(f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in crossing[:4])
-            names = _describe_sources(sources, edge_poly[attrs[at_b]])
-            raise PatternError(
-                f"the border crosses or touches itself at {pts} mm ({names})"
-                "; draw the outline of the sheet as one loop that does not cross itself"
-            )
-        open_v = np.flatnonzero(deg % 2 == 1)
-        if len(open_v):
-            pts = ", ".join(f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in open_v[:4])
-            warnings.append(f"the border is not closed: {len(open_v)} loose end(s) at {pts} mm")
-        else:
-            others = np.flatnonzero(~is_b)
-            mid = 0.5 * (verts[edges[others, 0]] + verts[edges[others, 1]])
-            inside = _inside_border(mid, verts[edges[is_b, 0]], verts[edges[is_b, 1]])
-            outside = others[~inside]
-            if len(outside):
-                warnings.append(
-                    f"removed {len(outside)} crease segment(s) outside the border, from "
-                    f"{_describe_sources(sources, edge_poly[attrs[outside]])}"
-                )
-                keep = np.ones(len(edges), bool)
-                keep[outside] = False
-                edges, attrs = edges[keep], attrs[keep]
+    if not is_b.any():
+        return edges, attrs
+    deg = np.bincount(edges[is_b].ravel(), minlength=len(verts))
+    crossing = np.flatnonzero((deg >= 4) & (deg % 2 == 0))
+    if len(crossing):
+        # four or more border pieces at one point: the outline crosses or touches itself, so which side is
+        # paper is ambiguous (a figure-eight outline); the designer must redraw it
+        at_b = is_b & np.isin(edges, crossing).any(axis=1)
+        pts = ", ".join(f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in crossing[:4])
+        names = _describe_sources(sources, edge_poly[attrs[at_b]])
+        raise PatternError(
+            f"the border crosses or touches itself at {pts} mm ({names})"
+            "; draw the outline of the sheet as one loop that does not cross itself"
+        )
+    open_v = np.flatnonzero(deg % 2 == 1)
+    if len(open_v):
+        pts = ", ".join(f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in open_v[:4])
+        warnings.append(f"the border is not closed: {len(open_v)} loose end(s) at {pts} mm")
+        return edges, attrs
+    others = np.flatnonzero(~is_b)
+    mid = 0.5 * (verts[edges[others, 0]] + verts[edges[others, 1]])
+    inside = _inside_border(mid, verts[edges[is_b, 0]], verts[edges[is_b, 1]])
+    outside = others[~inside]
+    if len(outside):
+        warnings.append(
+            f"removed {len(outside)} crease segment(s) outside the border, from "
+            f"{_describe_sources(sources, edge_poly[attrs[outside]])}"
+        )
+        keep = np.ones(len(edges), bool)
+        keep[outside] = False
+        edges, attrs = edges[keep], attrs[keep]
+    return edges, attrs
 
-    # -- straight border pieces between junctions, split evenly
-    straight_border = (assign[attrs] == "B") & ~edge_curve[attrs]
+
+def discretize(
+    curves: list[CreaseCurve],
+    *,
+    interval: float | None = None,
+    tolerance: float | None = None,
+    merge_tolerance: float | None = None,
+) -> CreasePattern:
+    """Discretise crease curves into a planar :class:`CreasePattern` (paper §3.1; see the module docstring).
+
+    ``None`` parameters take the scale-aware defaults (:func:`default_parameters` of :func:`sheet_size`). The
+    result's ``sources`` has one entry per curve (``edge_polyline`` indexes it), ``edge_from_curve`` marks pieces
+    of non-straight segments, and ``warnings`` lists capped parameters, duplicate segments with different
+    assignments, removed outside pieces and open borders.
+    """
+    if not curves:
+        raise PatternError("crease pattern: no curves to discretise")
+    _check_coordinates(curves)
+    warnings: list[str] = []
+    interval, tolerance, merge_tolerance = _resolve_parameters(curves, interval, tolerance, merge_tolerance, warnings)
+    sources = [c.source or f"curve {k}" for k, c in enumerate(curves)]
+    interval, tolerance = _guard_explosion(curves, interval, tolerance, warnings)
+    pieces = _discretise_curves(curves, sources, interval, tolerance, merge_tolerance, warnings)
+    verts, edges, attrs = _planar_arrangement(pieces, merge_tolerance, sources)
+    edges, attrs = _remove_duplicates(edges, attrs, pieces, sources, warnings)
+    edges, attrs = _clip_to_border(verts, edges, attrs, pieces, sources, warnings)
+    # step 5: straight border pieces between junctions, split evenly
+    straight_border = (pieces.assignment[attrs] == "B") & ~pieces.from_curve[attrs]
     verts, edges, attrs = _subdivide_border(verts, edges, attrs, straight_border, interval)
 
-    # -- drop stray vertices, renumber
+    # drop stray vertices, renumber
     used = np.unique(edges)
     remap = np.full(len(verts), -1, np.int64)
     remap[used] = np.arange(len(used))
     pattern = CreasePattern(
         vertices=verts[used],
         edges=remap[edges],
-        assignments=assign[attrs],
-        fold_angles=angle[attrs],
-        edge_polyline=edge_poly[attrs],
-        edge_from_curve=edge_curve[attrs],
+        assignments=pieces.assignment[attrs],
+        fold_angles=pieces.fold_angle[attrs],
+        edge_polyline=pieces.polyline[attrs],
+        edge_from_curve=pieces.from_curve[attrs],
         sources=sources,
         warnings=warnings,
     )

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh
+from .mesh_quality import corner_summary
 
 WARP_MIN_FOLD_DEG = 0.5
 """Edges folded less than this are "flat" and left out of the warp-angle mean (authors' threshold)."""
@@ -213,7 +214,8 @@ def _nanmax(x: np.ndarray) -> float:
 
 def summary(mesh: FoldMesh, positions: np.ndarray, percent: float = 1.0) -> dict[str, float]:
     """All the metrics at once: strain (mean/max %), warp (mean/max deg, edges counted), angle defect (mean/max
-    |δ| deg), fold-angle error (mean/max |error| deg over driven creases), and the mesh size."""
+    |δ| deg), fold-angle error (mean/max |error| deg over driven creases), the mesh size, and the flat mesh's
+    smallest corner and count of corners under 1° (:func:`.mesh_quality.corner_summary`)."""
     p = np.asarray(positions, dtype=float)
     theta = fold_angles(mesh, p)
     st = strain(mesh, p)
@@ -231,4 +233,5 @@ def summary(mesh: FoldMesh, positions: np.ndarray, percent: float = 1.0) -> dict
         "angle_defect_max_deg": _nanmax(defect),
         "fold_angle_error_mean_deg": _nanmean(err),
         "fold_angle_error_max_deg": _nanmax(err),
+        **corner_summary(mesh),
     }

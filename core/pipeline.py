@@ -14,12 +14,10 @@ from typing import Any
 import numpy as np
 
 from .mesh.fold_mesh import FoldMesh
+from .metrics.verdict import verdict
 from .pattern.model import CreasePattern, PatternError
 from .solve.constraints import Constraints, ConstraintSpec
 from .solve.solver import FoldResult, Solver, SolverSettings
-
-DOES_NOT_FOLD_DEG = 15.0
-"""Mean |simulated − target| crease angle (degrees) above which the report flags "does not fold as assigned"."""
 
 
 @dataclass
@@ -127,19 +125,7 @@ def make_report(
     report["self_intersecting_faces"] = self_intersecting_faces(mesh, result.positions)
     if constraints is not None and not constraints.empty:
         report.update(constraints.report(mesh, result.positions, start))
-    error = report["fold_angle_error_mean_deg"]
-    hingeless = bool(np.any(mesh.is_crease())) and not np.isfinite(error)
-    report["does_not_fold_as_assigned"] = hingeless or bool(error > DOES_NOT_FOLD_DEG)
-    if hingeless:
-        report["does_not_fold_message"] = (
-            "no crease has paper on both sides (every M/V crease lies on the edge of the meshed sheet): the pattern "
-            "does not fold as assigned; is the border closed around the creases?"
-        )
-    elif report["does_not_fold_as_assigned"]:
-        report["does_not_fold_message"] = (
-            f"the creases end {error:.1f}° (mean) away from their targets: the pattern "
-            "does not fold as assigned with this triangulation (paper Fig. 7); try another mesh type or add facets"
-        )
+    report.update(verdict(mesh, result.fold_angles, percent))  # paper Fig. 7: creases that stay flat or fold wrong
     return report
 
 

@@ -149,3 +149,102 @@ def test_fold_angle_error_wraps_at_180_degrees() -> None:
     err = metrics.fold_angle_error(mesh, pos)[mesh.is_crease()]
     assert np.allclose(np.abs(err), 0.7, atol=1e-6)
     assert metrics.summary(mesh, pos)["fold_angle_error_max_deg"] == pytest.approx(0.7, abs=1e-6)
+
+
+# ------------------------------------------------------------------------------------------------ verdict (Fig. 7)
+
+EXAMPLES = __import__("pathlib").Path(__file__).resolve().parents[1] / "examples"
+FIXTURES = __import__("pathlib").Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
+
+
+def _arc_mesh(name: str):
+    from curved_fold.core.io.reader import read_pattern
+
+    return build_mesh(read_pattern(EXAMPLES / name), "ruling")
+
+
+def test_verdict_on_given_angles_names_flat_and_wrong_way_creases_by_length() -> None:
+    """No solver: every crease at its target passes; the middle arc folded the wrong way, then half-flat, is named
+    with its length and a point on it (the arcs are centred at (5, −145) mm in the mesh's y-up millimetres)."""
+    from curved_fold.core.metrics.verdict import verdict
+
+    mesh = _arc_mesh("concentric_arcs.svg")
+    c = mesh.is_crease()
+    theta = np.where(c, mesh.fold_angles, 0.0)
+    assert verdict(mesh, theta, 1.0)["does_not_fold_as_assigned"] is False
+    arc2 = c & (np.array([mesh.sources[p] if p >= 0 else "" for p in mesh.edge_polyline]) == mesh.sources[2])
+    assert "arc2" in mesh.sources[2]
+    wrong = theta.copy()
+    wrong[arc2] *= -1
+    v = verdict(mesh, wrong, 1.0)
+    assert v["does_not_fold_as_assigned"] is True and len(v["creases_not_folding"]) == 1
+    bad = v["creases_not_folding"][0]
+    length = np.linalg.norm(np.diff(mesh.vertices[mesh.edges[arc2]], axis=1), axis=2).sum()
+    assert bad["wrong_way_mm"] == pytest.approx(length) and bad["flat_mm"] == 0.0
+    assert np.hypot(bad["at_mm"][0] - 5.0, bad["at_mm"][1] + 145.0) == pytest.approx(87.5, abs=0.1)
+    assert "arc2" in v["does_not_fold_message"] and "fold the wrong way" in v["does_not_fold_message"]
+    flat = theta.copy()
+    flat[arc2] *= 0.45  # under half its target: stays flat
+    v = verdict(mesh, flat, 1.0)
+    assert v["creases_not_folding"][0]["flat_mm"] == pytest.approx(length)
+    assert "stay flat" in v["does_not_fold_message"]
+    flat[arc2] = theta[arc2] * 0.55  # over half: folded, although the mean error is large
+    assert verdict(mesh, flat, 1.0)["does_not_fold_as_assigned"] is False
+
+
+def test_verdict_caps_targets_near_180_degrees() -> None:
+    """A crease folded 70° for a 180° target is folded (curved creases cannot reach 180°), 50° is not."""
+    from curved_fold.core.metrics.verdict import REACHABLE_DEG, verdict
+
+    mesh = _arc_mesh("concentric_arcs.svg")
+    c = mesh.is_crease()
+    mesh.fold_angles[c] = np.sign(mesh.fold_angles[c]) * 180.0
+    assert REACHABLE_DEG < 180.0
+    folded = np.where(c, np.sign(mesh.fold_angles) * 70.0, 0.0)
+    assert verdict(mesh, folded, 1.0)["does_not_fold_as_assigned"] is False
+    assert verdict(mesh, folded * 50.0 / 70.0, 1.0)["does_not_fold_as_assigned"] is True
+
+
+def test_isolated_crease_is_flagged_a_crease_dying_out_is_not() -> None:
+    from curved_fold.core.metrics.verdict import verdict
+    from curved_fold.core.pattern.discretize import discretize
+    from curved_fold.core.pattern.model import CreaseCurve, CurveSegment
+
+    c = [(0, 0), (100, 0), (100, 100), (0, 100)]
+    square = CreaseCurve([CurveSegment("line", np.array([c[i], c[(i + 1) % 4]], float)) for i in range(4)], "B", None)
+    for start, isolated in (((50, 20), True), ((50, 0), False)):
+        crease = CreaseCurve([CurveSegment("line", np.array([start, (50, 80)], float))], "V", 90.0, source="c")
+        mesh = build_mesh(discretize([square, crease]), "cdt")
+        theta = np.where(mesh.is_crease(), 90.0, 0.0)  # folded fully: the angles cannot tell
+        v = verdict(mesh, theta, 1.0)
+        assert v["does_not_fold_as_assigned"] is isolated
+        assert len(v["isolated_creases"]) == int(isolated)
+        if isolated:
+            assert v["isolated_creases"][0]["at_mm"] == pytest.approx([50.0, 50.0])
+            assert "end inside the paper" in v["does_not_fold_message"]
+
+
+@pytest.mark.parametrize(
+    ("path", "flagged"),
+    [
+        (EXAMPLES / "cannot_fold.svg", True),
+        (EXAMPLES / "concentric_arcs.svg", False),
+        (FIXTURES / "wavy_pleats.svg", False),
+    ],
+    ids=["cannot_fold", "concentric_arcs", "wavy_pleats"],
+)
+def test_verdict_on_solved_patterns(path, flagged: bool) -> None:
+    """Solved at 100 %: the all-mountain arcs are flagged, naming the inner arc (it folds 46° of 108°); the same
+    arcs alternating are not; nor is ``wavy_pleats``, whose ±180° creases end 33° (mean) short of their targets."""
+    from curved_fold.core.io.reader import read_pattern
+    from curved_fold.core.pipeline import fold_pattern
+
+    report = fold_pattern(read_pattern(path), percent=1.0).report
+    assert report["does_not_fold_as_assigned"] is flagged
+    if flagged:
+        assert "arc1" in report["does_not_fold_message"]
+        assert [c["polyline"] for c in report["creases_not_folding"]] == [1]
+    else:
+        assert report["creases_not_folding"] == [] and "does_not_fold_message" not in report
+    if path.name == "wavy_pleats.svg":
+        assert report["fold_angle_error_mean_deg"] > 15.0  # the old alarm's threshold: no verdict any more

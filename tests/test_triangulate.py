@@ -169,3 +169,102 @@ def test_fixtures_mesh_and_backends_agree(path: Path) -> None:
         if mesh_type != "earcut":
             other = build_mesh(pat, mesh_type, "mathutils")
             assert np.array_equal(mesh.triangles, other.triangles), f"{mesh_type} backends differ on {path.name}"
+
+
+# ------------------------------------------------------------------------------------------ patterns without border
+
+
+def flaps_svg(n: int = 16, sides: str = "#ff0000") -> str:
+    """``n`` curved flaps around an ``n``-gon, drawn with creases only (Origami Simulator's sphere of flaps, in
+    kind): each flap's two curved sides (stroke ``sides``) meet at its tip; the polygon's edges are valleys, each
+    flap has a mountain spine from the middle of its polygon edge to its tip. Without a border the sides are the
+    outer boundary of the drawing."""
+    import math
+
+    cx = cy = 75.0
+    r0, tip_r = 14.0, 70.0
+    body = []
+    for k in range(n):
+        a0, a1 = 2 * math.pi * k / n, 2 * math.pi * (k + 1) / n
+        am = 0.5 * (a0 + a1)
+        p0 = (cx + r0 * math.cos(a0), cy + r0 * math.sin(a0))
+        p1 = (cx + r0 * math.cos(a1), cy + r0 * math.sin(a1))
+        tip = (cx + tip_r * math.cos(am), cy + tip_r * math.sin(am))
+        c0 = (cx + 0.55 * tip_r * math.cos(a0 + 0.03), cy + 0.55 * tip_r * math.sin(a0 + 0.03))
+        c1 = (cx + 0.55 * tip_r * math.cos(a1 - 0.03), cy + 0.55 * tip_r * math.sin(a1 - 0.03))
+        mid = (0.5 * (p0[0] + p1[0]), 0.5 * (p0[1] + p1[1]))
+        for d, stroke in (
+            (f"M {p0[0]:.5f} {p0[1]:.5f} Q {c0[0]:.5f} {c0[1]:.5f} {tip[0]:.5f} {tip[1]:.5f}", sides),
+            (f"M {p1[0]:.5f} {p1[1]:.5f} Q {c1[0]:.5f} {c1[1]:.5f} {tip[0]:.5f} {tip[1]:.5f}", sides),
+            (f"M {p0[0]:.5f} {p0[1]:.5f} L {p1[0]:.5f} {p1[1]:.5f}", "#0000ff"),
+            (f"M {mid[0]:.5f} {mid[1]:.5f} L {tip[0]:.5f} {tip[1]:.5f}", "#ff0000"),
+        ):
+            body.append(f'<path d="{d}" fill="none" stroke="{stroke}" opacity="0.25"/>')
+    return (
+        '<?xml version="1.0" encoding="utf-8"?>\n<svg xmlns="http://www.w3.org/2000/svg" width="150mm" '
+        'height="150mm" viewBox="0 0 150 150">\n' + "\n".join(body) + "\n</svg>\n"
+    )
+
+
+def _flaps_pattern(sides: str) -> CreasePattern:
+    from curved_fold.core.io.svg import parse_svg_text
+    from curved_fold.core.pattern.discretize import discretize
+
+    return discretize(parse_svg_text(flaps_svg(sides=sides), "flaps.svg").curves)
+
+
+def _by_position(mesh, values: np.ndarray) -> np.ndarray:
+    order = np.lexsort(mesh.vertices.T[::-1])
+    return values[order]
+
+
+def test_pattern_without_border_takes_the_outer_boundary_as_border() -> None:
+    """Issue 12 item 5: sixteen flaps drawn with creases only mesh exactly as the same drawing with the flap sides
+    drawn as border: the same vertices, the same border edges, the same faces; the warning says what was done."""
+    bare = build_mesh(_flaps_pattern("#ff0000"), "ruling")
+    drawn = build_mesh(_flaps_pattern("#000000"), "ruling")
+    assert any("no border (B) segments drawn: took the outer boundary" in w for w in bare.warnings)
+    assert not any("outer boundary" in w for w in drawn.warnings)
+    assert bare.n_vertices == drawn.n_vertices and bare.n_faces == drawn.n_faces
+    assert np.allclose(_by_position(bare, bare.vertices), _by_position(drawn, drawn.vertices))
+
+    def border_set(mesh) -> set:
+        e = mesh.edges[mesh.assignments == "B"]
+        return {tuple(sorted(map(tuple, np.round(mesh.vertices[pair], 6).tolist()))) for pair in e}
+
+    assert border_set(bare) == border_set(drawn)
+    assert len(border_set(bare)) > 16 * 2  # both curved sides of every flap, several pieces each
+    crease = {a: int(np.count_nonzero(bare.assignments == a)) for a in "MV"}
+    assert crease == {a: int(np.count_nonzero(drawn.assignments == a)) for a in "MV"}
+    assert crease["V"] == 32 and crease["M"] == 16  # polygon edges split by the spines; one spine per flap
+
+
+def test_pattern_without_border_folds() -> None:
+    """The borderless flaps fold (to the same state as with the border drawn), converged."""
+    from curved_fold.core.pipeline import fold_pattern
+
+    bare = fold_pattern(_flaps_pattern("#ff0000"), percent=0.6)
+    drawn = fold_pattern(_flaps_pattern("#000000"), percent=0.6)
+    assert bare.report["converged"] and drawn.report["converged"]
+    pb = _by_position(bare.mesh, bare.result.positions)
+    pd = _by_position(drawn.mesh, drawn.result.positions)
+    assert np.abs(pb - pd).max() <= 1e-6 * bare.mesh.diagonal
+    assert np.ptp(pb[:, 2]) > 10.0  # the flaps rise out of the plane
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        '<path d="M0 50 L100 50" stroke="#f00"/><path d="M50 0 L50 100" stroke="#00f"/>',  # a cross: no region
+        '<path d="M50 0 L50 100" stroke="#f00"/>',  # one line
+    ],
+    ids=["cross", "line"],
+)
+def test_pattern_without_border_enclosing_nothing_is_refused_in_one_line(body: str) -> None:
+    from curved_fold.core.io.svg import parse_svg_text
+    from curved_fold.core.pattern.discretize import discretize
+
+    svg = f'<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" viewBox="0 0 100 100">{body}</svg>'
+    pattern = discretize(parse_svg_text(svg, "t.svg").curves)
+    with pytest.raises(PatternError, match=r"crease pattern has no border \(B\) segments: .* enclose no region"):
+        build_mesh(pattern, "ruling")

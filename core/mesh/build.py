@@ -15,6 +15,7 @@ import contextlib
 import gc
 import time
 from collections.abc import Iterator
+from dataclasses import replace
 
 import numpy as np
 
@@ -82,6 +83,12 @@ def _build_mesh(pattern: CreasePattern, mesh_type: str, backend: str) -> FoldMes
     _load_blender_modules(mesh_type, backend)
     t0 = time.perf_counter()
     pt = constrained_triangulation(pattern, backend)
+    if len(pt.outline_edges):  # no border drawn: the outer boundary of the drawn segments is the border
+        assignments = pattern.assignments.copy()
+        assignments[pt.outline_edges] = "B"
+        fold_angles = pattern.fold_angles.astype(float).copy()
+        fold_angles[pt.outline_edges] = np.nan
+        pattern = replace(pattern, assignments=assignments, fold_angles=fold_angles)
     warnings = list(pattern.warnings) + pt.warnings
     pts = pt.vertices
     tris, tface = pt.triangles, pt.triangle_region

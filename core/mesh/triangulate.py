@@ -16,7 +16,9 @@ Pipeline (:func:`constrained_triangulation`):
    give the *same* arrays on the same input, even on regular grids or concentric circles.
 3. Regions: triangles connected across non-constraint edges form the crease-pattern faces. The region touching the
    convex hull through a non-constraint edge is outside; crossing a border (``B``) segment toggles inside/outside,
-   crossing any other segment keeps it. Outside regions and holes are dropped.
+   crossing any other segment keeps it. Outside regions and holes are dropped. A pattern *without* border segments
+   is taken as Origami Simulator takes it: every region the drawn segments enclose is paper, and the segments
+   between paper and outside become the border (``outline_edges``, with a warning).
 
 Cuts are split afterwards (:func:`split_cuts`, Origami Simulator's ``splitCuts``): each cut becomes two border edges
 and each vertex is duplicated once per extra fan of triangles separated by cuts.
@@ -37,6 +39,13 @@ from ..pattern.model import CreasePattern, PatternError
 
 BACKENDS = ("auto", "triangle", "mathutils")
 
+NO_BORDER = (
+    "crease pattern has no border (B) segments: the sheet's outline must be drawn, as a closed curve with the role "
+    "Border (black in SVG), around the creases, or the drawn segments must enclose the paper (their outer boundary is "
+    "then taken as the border); these enclose no region"
+)
+"""The one line for a pattern without border whose segments enclose nothing (a lone line, a cross)."""
+
 _TIE_TOLERANCE = 1e-10
 """Relative in-circle determinant (normalised by the quad's size⁴) under which four points count as cocircular."""
 
@@ -52,6 +61,8 @@ class PlanarTriangulation:
       each face (outer first; inner loops around islands are clockwise); ``face_simple`` whether a face is a simple
       polygon (one loop, no repeated vertex).
     * ``segment_of``: ``{(i, j) with i < j: pattern edge index}`` for triangle sides that are pattern segments.
+    * ``outline_edges``: pattern edges taken as the border because the pattern has none (the outer boundary of the
+      drawn segments, as Origami Simulator does); empty when the pattern has a border.
     """
 
     vertices: np.ndarray
@@ -64,6 +75,7 @@ class PlanarTriangulation:
     segment_of: dict[tuple[int, int], int]
     backend: str
     warnings: list[str] = field(default_factory=list)
+    outline_edges: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -397,7 +409,7 @@ class _Segments:
 
 def _pattern_segments(pattern: CreasePattern, warnings: list[str]) -> _Segments:
     """Step 0: the pattern's vertices that lie on a segment, and its segments; refuse what cannot be meshed (loops,
-    two segments between one pair of vertices, no border, every vertex on one line)."""
+    two segments between one pair of vertices, every vertex on one line)."""
     edges = pattern.edges
     if len(edges) == 0:
         raise PatternError("triangulation: the crease pattern has no segments")
@@ -419,12 +431,9 @@ def _pattern_segments(pattern: CreasePattern, warnings: list[str]) -> _Segments:
         if (i, j) in segment_of:
             raise PatternError(f"triangulation: pattern edges {segment_of[(i, j)]} and {k} join the same two vertices")
         segment_of[(i, j)] = k
-    if not np.any(pattern.assignments == "B"):
-        raise PatternError(
-            "crease pattern has no border (B) segments: the sheet's outline must be drawn, as a closed curve with the "
-            "role Border (black in SVG), around the creases"
-        )
     if len(pts) < 3 or np.all(np.abs(orient(pts[0], pts[1], pts[2:])) <= 1e-12 * pattern.size**2):
+        if not np.any(pattern.assignments == "B"):
+            raise PatternError(NO_BORDER)
         raise PatternError("triangulation: all pattern vertices lie on one line; there is no sheet to mesh")
     return _Segments(used, pts, segs, key, segment_of)
 
@@ -433,6 +442,15 @@ def _triangulate_hull(pattern: CreasePattern, sg: _Segments, backend: str) -> np
     """Steps 1–2: the backend's CDT of the convex hull, CCW, every vertex present, made canonical (Lawson pass with
     deterministic tie breaks, sorted)."""
     pts = sg.points
+    _, first, inverse = np.unique(pts, axis=0, return_index=True, return_inverse=True)
+    repeated = np.flatnonzero(first[inverse.reshape(-1)] != np.arange(len(pts)))
+    if len(repeated):
+        # refused before the backend: Triangle drops a repeated vertex, and crashed (segfault) on one such input
+        v = int(sg.used[repeated[0]])
+        raise PatternError(
+            f"triangulation: pattern vertex {v} at {pattern.vertices[v].round(4).tolist()} mm is not in the "
+            "triangulation (it duplicates another vertex)"
+        )
     tris = _cdt_triangle(pts, sg.segments) if backend == "triangle" else _cdt_mathutils(pts, sg.segments)
     area = orient(pts[tris[:, 0]], pts[tris[:, 1]], pts[tris[:, 2]])
     tris[area < 0] = tris[area < 0][:, [0, 2, 1]]
@@ -464,6 +482,15 @@ def _check_constraints(
         )
 
 
+def _region_labels(he: tuple[np.ndarray, ...], n_tris: int) -> np.ndarray:
+    """Region of every triangle: triangles connected across non-segment edges, numbered by their smallest one."""
+    org, dst, twin, is_seg = he
+    tri_of = np.arange(3 * n_tris) // 3
+    inner = (twin >= 0) & ~is_seg & (org < dst)
+    roots = _components(n_tris, tri_of[inner], tri_of[twin[inner]])
+    return np.unique(roots, return_inverse=True)[1].reshape(-1)
+
+
 def _paper_triangles(
     pattern: CreasePattern,
     sg: _Segments,
@@ -478,10 +505,8 @@ def _paper_triangles(
     org, dst, twin, is_seg = he
     n_pts = np.int64(len(sg.points))
     tri_of = np.arange(3 * n_tris) // 3
-    inner = (twin >= 0) & ~is_seg & (org < dst)
-    roots = _components(n_tris, tri_of[inner], tri_of[twin[inner]])
-    region_ids, region = np.unique(roots, return_inverse=True)
-    n_regions = len(region_ids)
+    region = _region_labels(he, n_tris)
+    n_regions = int(region.max()) + 1
     hull = twin < 0
     outside_seed = set(region[tri_of[hull & ~is_seg]].tolist())
     adjacency: list[list[tuple[int, bool]]] = [[] for _ in range(n_regions)]
@@ -525,6 +550,26 @@ def _paper_triangles(
     if not keep_region.any():
         raise PatternError("triangulation: no paper left: the border does not enclose any region")
     return keep_region[region], region
+
+
+def _outline_regions(region: np.ndarray, he: tuple[np.ndarray, ...], n_tris: int) -> tuple[np.ndarray, np.ndarray]:
+    """Step 3 without any border segment (as Origami Simulator): the paper is everything the drawn segments enclose.
+
+    Regions reached from the convex hull through a non-segment edge are outside, all others paper. Returns
+    ``(keep_tri, outline)``: the triangles on paper and the half-edges (org < dst, or on the hull) of the segments
+    between paper and outside, which become the border."""
+    org, dst, twin, is_seg = he
+    tri_of = np.arange(3 * n_tris) // 3
+    hull = twin < 0
+    outside = np.zeros(int(region.max()) + 1, dtype=bool)
+    outside[region[tri_of[hull & ~is_seg]]] = True
+    keep_tri = ~outside[region]
+    if not keep_tri.any():
+        raise PatternError(NO_BORDER)
+    paper_he = keep_tri[tri_of]
+    twin_paper = np.where(twin >= 0, keep_tri[tri_of[np.maximum(twin, 0)]], False)
+    outline = np.flatnonzero(is_seg & paper_he & ~twin_paper)
+    return keep_tri, outline
 
 
 def _renumber_regions(region: np.ndarray) -> tuple[np.ndarray, int]:
@@ -572,7 +617,23 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
     seg_code = np.unique(sg.key[:, 0] * n_pts + sg.key[:, 1])
     he = half_edges(tris, len(sg.points), seg_code)
     _check_constraints(pattern, sg, seg_code, he[0], he[1])
-    keep_tri, region = _paper_triangles(pattern, sg, seg_code, he, len(tris), warnings)
+    outline_edges = np.zeros(0, dtype=np.int64)
+    if np.any(pattern.assignments == "B"):
+        keep_tri, region = _paper_triangles(pattern, sg, seg_code, he, len(tris), warnings)
+    else:
+        region = _region_labels(he, len(tris))
+        keep_tri, outline = _outline_regions(region, he, len(tris))
+        code = np.minimum(he[0][outline], he[1][outline]) * n_pts + np.maximum(he[0][outline], he[1][outline])
+        pairs = np.column_stack(np.divmod(np.unique(code), n_pts)).tolist()
+        outline_edges = np.array(sorted(sg.segment_of[(i, j)] for i, j in pairs), dtype=np.int64)
+        names = sorted(
+            {pattern.sources[pattern.edge_polyline[k]] for k in outline_edges.tolist()} if pattern.sources else set()
+        )
+        shown = ", ".join(names[:4]) + (f" and {len(names) - 4} more" if len(names) > 4 else "")
+        warnings.append(
+            f"no border (B) segments drawn: took the outer boundary of the drawn segments as the border, as Origami "
+            f"Simulator does ({len(outline_edges)} segment(s){', from ' + shown if shown else ''}; they no longer fold)"
+        )
     tris = tris[keep_tri]
     tri_region, n_faces = _renumber_regions(region[keep_tri])
     pts2, vertex_source, tris, seg2 = _drop_unused_vertices(sg, tris, warnings)
@@ -595,6 +656,7 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
         segment_of=seg2,
         backend=backend,
         warnings=warnings,
+        outline_edges=outline_edges,
     )
 
 

@@ -395,3 +395,34 @@ def test_curved_pleat_simple_hub_is_clean() -> None:
     p = discretize(read_svg(FIXTURES / "curvedPleatSimple.svg").curves)
     assert (p.count("M"), p.count("V"), p.count("F")) == (1, 1, 14)
     assert not p.warnings
+
+
+def test_curve_samples_a_hair_from_a_junction_are_removed_within_tolerance(monkeypatch) -> None:
+    """Issue 12: a parabola passes near the corner where two straight creases meet and crosses one of them beside
+    one of its own sample points. Removing such samples (within the tolerance) raises the smallest corner any
+    triangulation must have from 0.46° to 1.17°; every removed sample stays within the tolerance of the new
+    polyline. No fixture or example has such a sample (their mesh digests are unchanged)."""
+    from curved_fold.core.io.svg import parse_svg_text
+    from curved_fold.core.metrics.mesh_quality import forced_smallest_corner
+    from curved_fold.core.pattern import discretize as disc
+
+    svg = (
+        '<svg xmlns="http://www.w3.org/2000/svg" width="150mm" height="150mm" viewBox="0 0 150 150">'
+        '<rect x="0" y="0" width="150" height="150" fill="none" stroke="#000000"/>'
+        '<path d="M 75 0 L 75 75" stroke="#0000ff" opacity="0.5"/>'
+        '<path d="M 75 75 L 150 100" stroke="#0000ff" opacity="0.5"/>'
+        '<path d="M 0 140 Q 75.0 10.3 150 140" stroke="#ff0000" opacity="0.5"/></svg>'
+    )
+    curves = parse_svg_text(svg, "t.svg").curves
+    fixed = disc.discretize(curves)
+    monkeypatch.setattr(disc, "JUNCTION_SLIVER_FRACTION", 0.0)
+    plain = disc.discretize(curves)
+    assert fixed.n_vertices < plain.n_vertices
+    assert forced_smallest_corner(plain) < 0.5 < 1.1 < forced_smallest_corner(fixed)
+    _, tolerance, _ = disc.default_parameters(150.0)
+    kept = {tuple(v) for v in fixed.vertices.round(9).tolist()}
+    gone = np.array([v for v in plain.vertices.round(9).tolist() if tuple(v) not in kept])
+    a, b = fixed.vertices[fixed.edges[:, 0]], fixed.vertices[fixed.edges[:, 1]]
+    for p in gone:
+        d = disc._point_segment_distance(np.repeat(p[None], len(a), axis=0), a, b).min()
+        assert d <= tolerance

@@ -17,7 +17,10 @@ Steps, in order:
    number of nearby pairs, not with E².
 4. **Outside pieces.** If the border is closed, crease pieces lying outside it (creases drawn slightly past the
    edge of the sheet) are removed, with a warning.
-5. **Border pieces.** Straight border edges, now running between the junctions the designer drew, are split into
+5. **Samples beside junctions.** A curve sample point left a small fraction of a chord from a crossing or T-junction
+   on its curve is removed where the curve stays within ``tolerance`` of the new chord (the short piece would force
+   sliver triangles; :func:`_drop_samples_beside_junctions`).
+6. **Border pieces.** Straight border edges, now running between the junctions the designer drew, are split into
    ⌈length / interval⌉ equal pieces (so no sliver is left beside a junction).
 
 Defaults follow the paper (150 mm sheet: interval 7 mm, tolerance 0.07 mm) and are **scale-aware**: multiplied by
@@ -79,6 +82,10 @@ MIN_SHEET_MM = 1e-3
 MAX_COORDINATE_MM = 1e8
 """Largest |coordinate| accepted (100 km): beyond it squared lengths and cross products overflow or lose precision;
 such values come from a wrong unit or viewBox, never from a real sheet."""
+
+JUNCTION_SLIVER_FRACTION = 0.25
+"""A curve sample vertex closer than this many ``interval`` to a junction on its curve is removed when the curve
+allows (see :func:`_drop_samples_beside_junctions`)."""
 
 PRIORITY = {"B": 0, "C": 1, "M": 2, "V": 2, "U": 3, "F": 4}
 """Which assignment wins when two drawn segments coincide: the sheet outline first (a crease on the border cannot
@@ -472,6 +479,72 @@ def _subdivide_border(
     return np.concatenate([verts, new_pts]), new_edges, attrs[owner[:-1][same]]
 
 
+def _drop_samples_beside_junctions(
+    verts: np.ndarray, edges: np.ndarray, attrs: np.ndarray, pieces: _Pieces, interval: float, tolerance: float
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Remove curve sample vertices left a hair from a junction (issue 12: no sliver beyond what the creases force).
+
+    A curve's sample points are placed before the crossings are known, so a crossing or T-junction can land a small
+    fraction of a chord from one of them; the short piece between them makes corners of a few degrees down to
+    fractions of a degree with every far vertex it is triangulated to. Such a sample vertex (two pieces of the same
+    drawn curve, nothing else) is removed when its piece to the junction is shorter than
+    :data:`JUNCTION_SLIVER_FRACTION` × ``interval`` and it lies within ``tolerance`` of the chord that replaces its two
+    pieces (so the polyline stays as close to the curve as the paper asks, §3.1), and no other vertex lies in the
+    thin triangle it leaves. Returns ``(edges, attrs, removed)``; the removed vertices are dropped as unused later.
+    """
+    n = len(verts)
+    deg = np.bincount(edges.ravel(), minlength=n)
+    curve = pieces.from_curve[attrs]
+    length = np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T)
+    d0, d1 = deg[edges[:, 0]], deg[edges[:, 1]]
+    short = curve & (length < JUNCTION_SLIVER_FRACTION * interval) & ((d0 == 2) != (d1 == 2))
+    if not short.any():
+        return edges, attrs, 0
+    samples = np.unique(np.where(d0[short] == 2, edges[short, 0], edges[short, 1]))
+    inc: dict[int, list[int]] = {}
+    for k in np.flatnonzero(np.isin(edges, samples).any(axis=1)).tolist():
+        for v in edges[k].tolist():
+            if deg[v] == 2:
+                inc.setdefault(v, []).append(k)
+    drop = np.zeros(len(edges), dtype=bool)
+    new_edges = edges.copy()
+    touched: set[int] = set()
+    removed = 0
+    for k in np.flatnonzero(short).tolist():
+        a, b = edges[k].tolist()
+        for junction, sample in ((a, b), (b, a)):
+            if deg[junction] == 2 or deg[sample] != 2 or {junction, sample} & touched:
+                continue
+            k2 = next(x for x in inc[sample] if x != k)
+            w = int(edges[k2, 0] if edges[k2, 1] == sample else edges[k2, 1])
+            same = (
+                curve[k2]
+                and pieces.polyline[attrs[k2]] == pieces.polyline[attrs[k]]
+                and pieces.assignment[attrs[k2]] == pieces.assignment[attrs[k]]
+            )
+            if not same or w == junction or w in touched:
+                continue
+            pa, pb, pw = verts[junction], verts[sample], verts[w]
+            if _point_segment_distance(pb[None], pa[None], pw[None])[0] > tolerance:
+                continue
+            if np.any(np.all(np.sort(edges[~drop], axis=1) == sorted((junction, w)), axis=1)):
+                continue  # the chord exists already
+            # no other vertex in the triangle (junction, sample, w) the removal sweeps over
+            o1 = _cross((pb - pa)[None], verts - pa)
+            o2 = _cross((pw - pb)[None], verts - pb)
+            o3 = _cross((pa - pw)[None], verts - pw)
+            inside = ((o1 > 0) & (o2 > 0) & (o3 > 0)) | ((o1 < 0) & (o2 < 0) & (o3 < 0))
+            inside[[junction, sample, w]] = False
+            if inside.any():
+                continue
+            new_edges[k] = (junction, w)
+            drop[k2] = True
+            touched.update((junction, sample, w))
+            removed += 1
+            break
+    return new_edges[~drop], attrs[~drop], removed
+
+
 def _inside_border(points: np.ndarray, border_a: np.ndarray, border_b: np.ndarray) -> np.ndarray:
     """Even-odd test of points against the closed border polygon(s) given as segments (chunked, vectorised)."""
     out = np.zeros(len(points), dtype=bool)
@@ -808,7 +881,8 @@ def discretize(
     verts, edges, attrs = _planar_arrangement(pieces, merge_tolerance, sources)
     edges, attrs = _remove_duplicates(edges, attrs, pieces, sources, warnings)
     edges, attrs = _clip_to_border(verts, edges, attrs, pieces, sources, warnings)
-    # step 5: straight border pieces between junctions, split evenly
+    edges, attrs, _ = _drop_samples_beside_junctions(verts, edges, attrs, pieces, interval, tolerance)  # step 5
+    # step 6: straight border pieces between junctions, split evenly
     straight_border = (pieces.assignment[attrs] == "B") & ~pieces.from_curve[attrs]
     verts, edges, attrs = _subdivide_border(verts, edges, attrs, straight_border, interval)
 

@@ -251,7 +251,10 @@ def check_complete(path: Path, suffix: str, n_vertices: int) -> None:
         with open(path, "rb") as fh:
             data = fh.read()
         count = data.count(b"\nv ") + data.startswith(b"v ")
-        if not data.endswith(b"\n") or count != n_vertices:
+        # Blender writes the elements (f, l) last: a file cut on a line boundary after the vertices (bpy 5.2's
+        # writer puts all v lines in the first half) must not pass
+        last = data.rstrip(b"\n").rsplit(b"\n", 1)[-1]
+        if not data.endswith(b"\n") or count != n_vertices or not last.startswith((b"f ", b"l ")):
             raise OSError(f"the OBJ file is incomplete ({count} of {n_vertices} vertices, {size} bytes written)")
     elif suffix == ".glb":
         with open(path, "rb") as fh:

@@ -103,7 +103,7 @@ def assignment_codes(assignments: np.ndarray) -> np.ndarray:
         codes[letters == a] = i
     if (codes < 0).any():
         bad = int(np.flatnonzero(codes < 0)[0])
-        raise ValueError(f"edge {bad} has unknown assignment {letters[bad]!r}; expected one of {ASSIGNMENTS}")
+        raise ValueError(f"edge {bad} has unknown assignment {str(letters[bad])!r}; expected one of {ASSIGNMENTS}")
     return codes
 
 

@@ -7,6 +7,10 @@ results are stored in ``tests/data/mesh_digests.json``; ``tests/test_mesh_refere
 current code. A digest covers every array of the mesh (triangles as a set with their winding, edges, assignments,
 fold angles, curve flags, polylines, faces as cycles, swap count), so any change of result shows.
 
+The digests hold on numpy 1.26 and 2.x and on any x86-64 CPU because mesh generation uses only correctly rounded
+arithmetic and libm's atan2, never numpy's ``power``/``arctan2`` (docs/packaging.md, "Same meshes on numpy 1.26 and
+numpy 2"); they were re-recorded once for that change (the earlier ones held only on AVX-512 CPUs with numpy 1.26).
+
 Regenerate (only after a deliberate change of results, saying why in the commit):
 ``.venv/bin/python -m curved_fold.tests.mesh_digests --write``.
 """

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -21,6 +22,9 @@ def run(*args: str) -> subprocess.CompletedProcess:
         text=True,
         timeout=120,
         cwd=REPO,
+        # Python's environment, not the process's: bpy 5.2 setenv()s OCIO when imported (by earlier tests), and a
+        # child bpy 5.2 started with OCIO set logs "color_management | Using OCIO=..." on import
+        env=dict(os.environ),
     )
 
 

@@ -486,7 +486,12 @@ def hostile_files(tmp: Path) -> dict[str, tuple[Path, str]]:
             "fold",
             r"vertices_coords: array length 1,000,000 is above the limit of 200,000 .*CURVED_FOLD_MAX_FOLD_ENTRIES",
         ),
-        "FOLD nested 3,000 deep": ('{"x": ' + "[" * 3000 + "]" * 3000 + "}", "fold", "nesting depth above the limit"),
+        # Python 3.11's json raises RecursionError (no depth known); 3.13's parses it and the depth check names it
+        "FOLD nested 3,000 deep": (
+            '{"x": ' + "[" * 3000 + "]" * 3000 + "}",
+            "fold",
+            r"nesting depth (3,001 is )?above the limit",
+        ),
         "gzip data": (
             b"\x1f\x8b\x08\x00" + b"\x00" * 40,
             "svg",

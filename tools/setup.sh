@@ -5,26 +5,38 @@
 #   missing, with apt-get when running as root, otherwise a clear message saying what to run.
 # * .venv      : Python 3.11 + bpy 5.0.1 + triangle + numpy + pytest + hypothesis + matplotlib + ruff
 # * .venv-4.5  : Python 3.11 + bpy 4.5.15 (the LTS) + triangle + numpy + pytest + hypothesis + matplotlib (bench smoke test)
+# * .venv-5.2  : Python 3.13 + bpy 5.2.3 (the current LTS) + numpy 2 + triangle + pytest + hypothesis + matplotlib
 # * in each venv, `import curved_fold` works: the repository root IS the package, whatever the clone's folder is
 #   called, so <venv>/links/curved_fold is a symlink to the root and a .pth file puts <venv>/links on sys.path.
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-PYTHON="${PYTHON:-}"
+PYTHON="${PYTHON:-}"       # a Python 3.11 to use for .venv and .venv-4.5 (optional)
+PYTHON313="${PYTHON313:-}" # a Python 3.13 to use for .venv-5.2 (optional)
 
 APT_PACKAGES=(libx11-6 libxi6 libxfixes3 libxrender1 libxkbcommon0 libsm6 libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri)
 MAIN_REQUIREMENTS=(bpy==5.0.1 numpy==1.26.4 triangle==20250106 pytest hypothesis matplotlib ruff)
 LTS_REQUIREMENTS=(bpy==4.5.15 numpy==1.26.4 triangle==20250106 pytest hypothesis matplotlib)
+LTS52_REQUIREMENTS=(bpy==5.2.3 numpy==2.5.5 triangle==20250106 pytest hypothesis matplotlib)
 
 say() { printf 'setup: %s\n' "$*"; }
 
 find_python() {
-    # bpy 4.5/5.0 wheels exist for CPython 3.11 only.
-    local candidate
-    for candidate in "$PYTHON" python3.11 python3; do
+    # find_python <major.minor> [explicit]: print the path of a working CPython <major.minor>, or fail.
+    # bpy 4.5/5.0 wheels exist for CPython 3.11 only, bpy 5.1/5.2 for 3.13 only. Each candidate is run, not just
+    # looked up: a pyenv shim for a version that is installed but not selected exists on PATH and fails when run,
+    # so pyenv's own versions are tried last, by their real paths.
+    local want="$1" explicit="${2:-}" candidate root version
+    local check="import sys; sys.exit(sys.version_info[:2] != tuple(map(int, '$want'.split('.'))))"
+    local candidates=("$explicit" "python$want" python3)
+    if command -v pyenv >/dev/null 2>&1 && root="$(pyenv root 2>/dev/null)"; then
+        while read -r version; do
+            candidates+=("$root/versions/$version/bin/python$want")
+        done < <(pyenv versions --bare 2>/dev/null | grep -E "^$want(\.[0-9]+)?$" | sort -rV)
+    fi
+    for candidate in "${candidates[@]}"; do
         [ -n "$candidate" ] || continue
-        if command -v "$candidate" >/dev/null 2>&1 &&
-            "$candidate" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))' 2>/dev/null; then
+        if command -v "$candidate" >/dev/null 2>&1 && "$candidate" -c "$check" 2>/dev/null; then
             command -v "$candidate"
             return 0
         fi
@@ -59,13 +71,14 @@ system_libraries() {
 }
 
 make_venv() {
-    # make_venv <dir> <requirements...>
-    local venv="$1"
-    shift
+    # make_venv <dir> <python version> <why that version> <requirements...>
+    local venv="$1" want="$2" why="$3"
+    shift 3
     if [ ! -x "$venv/bin/python" ]; then
-        local python
-        if ! python="$(find_python)"; then
-            say "ERROR: Python 3.11 not found (bpy 4.5 and 5.0 exist only for CPython 3.11); set PYTHON=/path/to/python3.11"
+        local python explicit="$PYTHON" var=PYTHON
+        if [ "$want" = 3.13 ]; then explicit="$PYTHON313" var=PYTHON313; fi
+        if ! python="$(find_python "$want" "$explicit")"; then
+            say "ERROR: Python $want not found ($why); install it (pyenv install $want, or your distribution's python$want package) or set $var=/path/to/python$want"
             exit 1
         fi
         say "creating $venv with $python"
@@ -83,6 +96,8 @@ make_venv() {
 }
 
 system_libraries
-make_venv "$ROOT/.venv" "${MAIN_REQUIREMENTS[@]}"
-make_venv "$ROOT/.venv-4.5" "${LTS_REQUIREMENTS[@]}"
+PY311_WHY="bpy 4.5 and 5.0 exist only for CPython 3.11"
+make_venv "$ROOT/.venv" 3.11 "$PY311_WHY" "${MAIN_REQUIREMENTS[@]}"
+make_venv "$ROOT/.venv-4.5" 3.11 "$PY311_WHY" "${LTS_REQUIREMENTS[@]}"
+make_venv "$ROOT/.venv-5.2" 3.13 "bpy 5.1 and 5.2 exist only for CPython 3.13" "${LTS52_REQUIREMENTS[@]}"
 say "done"

@@ -47,7 +47,7 @@ class CURVED_FOLD_OT_fold(JobOperator, bpy.types.Operator):
         unit="LENGTH",
     )
     mesh_type: EnumProperty(
-        name="Mesh", description="How the crease pattern is triangulated", items=MESH_TYPES, default="ruling"
+        name="Mesh", description="How the crease pattern is triangulated", items=MESH_TYPES, default="RULING"
     )
     use_fold_angle: BoolProperty(
         name="Override Crease Angles",
@@ -69,8 +69,8 @@ class CURVED_FOLD_OT_fold(JobOperator, bpy.types.Operator):
     solver: EnumProperty(
         name="Solver",
         description="Which solver folds the mesh",
-        items=(("fast", "Fast", "Solve to equilibrium (default)"), ("faithful", "Faithful", "Origami Simulator's")),
-        default="fast",
+        items=(("FAST", "Fast", "Solve to equilibrium (default)"), ("FAITHFUL", "Faithful", "Origami Simulator's")),
+        default="FAST",
     )
 
     @classmethod

@@ -27,10 +27,18 @@ from bpy.props import (
     StringProperty,
 )
 
+
+def engine_id(identifier: str) -> str:
+    """The engine's name (``core.mesh.build``'s mesh types, ``core.solve.solver``'s methods) of a Blender enum
+    identifier: Blender's enum identifiers are upper case (``RULING``, ``FAST``), the engine's and the command line's
+    names lower case (``ruling``, ``fast``)."""
+    return identifier.lower()
+
+
 MESH_TYPES = (
-    ("ruling", "Ruling-aware", "Constrained Delaunay triangulation, then edge swaps along estimated rulings (paper)"),
-    ("cdt", "Constrained Delaunay", "Constrained Delaunay triangulation without ruling-aware swaps (baseline)"),
-    ("earcut", "Ear clipping", "Ear-clipped faces, as Origami Simulator's curved importer does (baseline)"),
+    ("RULING", "Ruling-aware", "Constrained Delaunay triangulation, then edge swaps along estimated rulings (paper)"),
+    ("CDT", "Constrained Delaunay", "Constrained Delaunay triangulation without ruling-aware swaps (baseline)"),
+    ("EARCUT", "Ear clipping", "Ear-clipped faces, as Origami Simulator's curved importer does (baseline)"),
 )
 
 SOLVER_MODES = (
@@ -110,7 +118,7 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
     mesh_type: EnumProperty(
         name="Mesh",
         items=MESH_TYPES,
-        default="ruling",
+        default="RULING",
         description="How the crease pattern is triangulated",
         update=_live_update,
     )
@@ -144,10 +152,10 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
     solver: EnumProperty(
         name="Solver",
         items=(
-            ("fast", "Fast", "Implicit/Newton-style solver to equilibrium (default)"),
-            ("faithful", "Faithful", "Origami Simulator's explicit bar-and-hinge integrator, stepped to rest"),
+            ("FAST", "Fast", "Implicit/Newton-style solver to equilibrium (default)"),
+            ("FAITHFUL", "Faithful", "Origami Simulator's explicit bar-and-hinge integrator, stepped to rest"),
         ),
-        default="fast",
+        default="FAST",
         description="Which solver folds the mesh",
         update=_live_resolve,
     )

@@ -18,7 +18,13 @@ import numpy as np
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
 from . import bake, jobs, mesh_object, pins, self_intersection
-from .fold_settings import override_angle_degrees, override_fold_angles, pattern_parameters, settings_dict
+from .fold_settings import (
+    engine_id,
+    override_angle_degrees,
+    override_fold_angles,
+    pattern_parameters,
+    settings_dict,
+)
 
 
 @dataclass
@@ -142,8 +148,8 @@ def fold_from_pattern(
     from ..core.pipeline import fold_pattern
 
     pct = (props.fold_percent / 100.0 if props is not None else 1.0) if percent is None else percent
-    mesh_type = mesh_type or (props.mesh_type if props is not None else "ruling")
-    method = solver or (props.solver if props is not None else "fast")
+    mesh_type = engine_id(mesh_type or (props.mesh_type if props is not None else "RULING"))
+    method = engine_id(solver or (props.solver if props is not None else "FAST"))
     if angle is None:
         angle = override_angle_degrees(props)
     pattern = override_fold_angles(pattern, angle)  # Override Crease Angles applies to every crease
@@ -174,7 +180,7 @@ def resolve_stored(
     settings = solver_settings(props, max_iterations=max_iterations)
     held = pins.constraints_from_object(ob, mesh)  # pins hold vertices where they are: start from the shape shown
     start = pins.current_positions(ob) if held is not None and start is None else start
-    run = refold_mesh(mesh, pct, solver=props.solver, settings=settings, start=start, constraints=held)
+    run = refold_mesh(mesh, pct, solver=engine_id(props.solver), settings=settings, start=start, constraints=held)
     return outcome_from_run(run, pct)
 
 
@@ -309,7 +315,7 @@ def _mesh_steps(pattern_fn, angle, mesh_type) -> Generator[jobs.Progress, None, 
 
     pattern = _with_angle(override_fold_angles(pattern_fn(), angle), angle)  # Override applies to every crease
     yield jobs.Progress("mesh")
-    mesh = build_mesh(pattern, mesh_type=mesh_type)
+    mesh = build_mesh(pattern, mesh_type=engine_id(mesh_type))
     yield jobs.Progress("model")
     return mesh, list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings)
 
@@ -320,6 +326,7 @@ def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None, 
     from ..core.pipeline import FoldRun, make_report
     from ..core.solve.solver import Solver
 
+    method = engine_id(method)
     solver = Solver(mesh, settings, method, constraints)
     if method != "faithful":
         solver.assembler  # noqa: B018 - the Hessian ordering: part of this unit, not the first iteration
@@ -344,11 +351,11 @@ class FoldOptions:
 
     interval: float = 0.0
     tolerance: float = 0.0
-    mesh_type: str = "ruling"
+    mesh_type: str = "RULING"
     use_fold_angle: bool = False
     fold_angle: float = 180.0
     fold_percent: float = 100.0
-    solver: str = "fast"
+    solver: str = "FAST"
 
 
 def new_fold_name(sources, coll) -> str:

@@ -24,7 +24,7 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from . import bake, folding, jobs, mesh_object
-from .fold_settings import settings_dict
+from .fold_settings import engine_id, settings_dict
 
 FRAME_MAX_ITERATIONS = 12
 """Newton iterations per timeline or bake frame. Warm-started frames converge in 3-9 on the fixtures; where the
@@ -92,7 +92,7 @@ class FrameCache:
 
         key = settings_key(props)
         if key not in self._solvers:
-            method = "fast" if props.solver == "faithful" else props.solver
+            method = "fast" if props.solver == "FAITHFUL" else engine_id(props.solver)
             settings = folding.solver_settings(props, max_iterations=FRAME_MAX_ITERATIONS)
             self._solvers = {key: Solver(self.mesh, settings, method)}
         return self._solvers[key]

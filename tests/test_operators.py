@@ -426,7 +426,7 @@ def test_live_handler_detects_source_edits_and_refolds(folded, extension):
     faces = len(ob.data.polygons)
     assert live.run_pending() == {ob.name: "ok"}
     assert len(ob.data.polygons) == faces and ob.curved_fold_mesh.last_iterations > 0
-    ob.curved_fold_mesh.mesh_type = "cdt"
+    ob.curved_fold_mesh.mesh_type = "CDT"
     ob.curved_fold_mesh.fold_percent = 60.0
     assert live._pending[ob.name][1] is True  # a pattern setting changed: a pending rebuild is kept
     live._pending.clear()

@@ -312,6 +312,22 @@ def test_every_property_has_a_tooltip_and_results_are_not_animatable(extension):
     assert mesh_props["fold_percent"].is_animatable
 
 
+def test_enum_identifiers_are_upper_case_as_blenders(extension):
+    """Every enum of ours uses Blender's identifier style (``RULING``, ``FAST``; the engine's lower-case names are
+    mapped at one place, ``fold_settings.engine_id``)."""
+    mixed = [
+        f"{group.identifier}.{p.identifier}: {item.identifier}"
+        for group in _groups()
+        for p in group.properties
+        if p.type == "ENUM"
+        for item in p.enum_items
+        if item.identifier != item.identifier.upper()
+    ]
+    assert not mixed, mixed
+    mesh_props = bpy.types.Object.bl_rna.properties["curved_fold_mesh"].fixed_type.properties
+    assert {i.identifier for i in mesh_props["mesh_type"].enum_items} == {"RULING", "CDT", "EARCUT"}
+
+
 def test_show_colors_material_message(extension, clean_scene):
     import_file(REPO / "examples" / "single_curve.svg")
     assert bpy.ops.curved_fold.fold(collection="single_curve") == {"FINISHED"}

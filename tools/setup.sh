@@ -8,6 +8,7 @@
 # * .venv-5.2  : Python 3.13 + bpy 5.2.3 (the current LTS) + numpy 2 + triangle + pytest + hypothesis + matplotlib
 # * in each venv, `import curved_fold` works: the repository root IS the package, whatever the clone's folder is
 #   called, so <venv>/links/curved_fold is a symlink to the root and a .pth file puts <venv>/links on sys.path.
+# * tools/node_modules/gltf-validator: the Khronos glTF validator from npm, when npm is there (a test runs it)
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -100,4 +101,17 @@ PY311_WHY="bpy 4.5 and 5.0 exist only for CPython 3.11"
 make_venv "$ROOT/.venv" 3.11 "$PY311_WHY" "${MAIN_REQUIREMENTS[@]}"
 make_venv "$ROOT/.venv-4.5" 3.11 "$PY311_WHY" "${LTS_REQUIREMENTS[@]}"
 make_venv "$ROOT/.venv-5.2" 3.13 "bpy 5.1 and 5.2 exist only for CPython 3.13" "${LTS52_REQUIREMENTS[@]}"
+
+# The Khronos glTF validator (npm) for tests/test_export_files.py: the real client checks our .glb files. Optional:
+# without node/npm the test skips and says why.
+GLTF_VALIDATOR=gltf-validator@2.0.0-dev.3.10
+if [ -f "$ROOT/tools/node_modules/gltf-validator/package.json" ]; then
+    say "glTF validator: present"
+elif command -v npm >/dev/null 2>&1; then
+    say "installing $GLTF_VALIDATOR into tools/node_modules"
+    npm install --prefix "$ROOT/tools" --no-save --no-package-lock --no-audit --no-fund "$GLTF_VALIDATOR" >/dev/null ||
+        say "glTF validator not installed: tests/test_export_files.py skips its validator test"
+else
+    say "npm not found: tests/test_export_files.py skips its glTF validator test"
+fi
 say "done"

@@ -135,7 +135,7 @@ def render_markdown(rows: list[dict], repeats: int, load: str = "") -> str:
         f"{repeats} runs; generation = triangulation + swaps, wall time, default backend, 2-core CI-class machine"
         + (f", load average {load} during the run, so other jobs shared the cores)." if load else ")."),
         "Inputs: every fixture in `tests/fixtures` and every example in `examples/`, read with "
-        "`core.reader.read_pattern` at the default discretisation parameters.",
+        "`core.io.reader.read_pattern` at the default discretisation parameters.",
         "",
         "| Pattern | #V | curve segs | earcut #F | earcut ms | CDT #F | CDT ms | ruling #F | ruling ms | swaps |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
@@ -193,7 +193,7 @@ NOTES = """![The three meshes of one single-curve pattern](img/meshes_single_cur
 border, grey: facets. (c) The swaps turn the Delaunay diagonals into rungs across the crease, roughly orthogonal to
 it.*
 
-## How the meshes are made (`core/triangulate.py`, `core/ruling.py`, `core/earcut.py`, `core/meshing.py`)
+## How the meshes are made (`core/mesh/triangulate.py`, `core/mesh/ruling.py`, `core/mesh/earcut.py`, `core/mesh/build.py`)
 
 - **CDT** of the convex hull of the pattern vertices with every segment as a constraint; no Steiner points
   (`triangle` with switches `pcQ`, or `mathutils.geometry.delaunay_2d_cdt` output type 0). An added or merged
@@ -210,7 +210,7 @@ it.*
 - **Cuts** are split after meshing (Origami Simulator's `splitCuts`): corners are grouped into fans connected
   across non-cut edges and each extra fan gets a copy of the vertex.
 - **earcut** baseline: per face, triangles kept, quads split on the shorter diagonal (the other one if the shorter
-  is outside a concave quad), larger simple faces ear-clipped (`core/earcut.py`, textbook ear clipping). Faces with
+  is outside a concave quad), larger simple faces ear-clipped (`core/mesh/earcut.py`, textbook ear clipping). Faces with
   holes or dangling creases fall back to their CDT triangles (with a warning), since Origami Simulator's earcut does
   not support them either (issue #47).
 
@@ -277,7 +277,7 @@ mesh) and in an O(n³) ear clipping. Now:
 - Equality is enforced by `tests/test_mesh_reference.py`: every fixture and example, both backends, the three mesh
   types, and hand-made ties and holes, against a frozen copy of the first implementation (`tests/mesh_reference/`).
 
-## Metrics (`core/metrics.py`)
+## Metrics (`core/metrics/measures.py`)
 
 - `fold_angles`: signed, Origami Simulator's convention (valley > 0), `nan` on boundary edges.
 - `warp_angles`: ground-truth §4.1 (non-crease edges, |θ| ≥ 0.5°, tangents = central differences along the face

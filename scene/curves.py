@@ -5,7 +5,7 @@
   import wrote and nobody edited gives back the file's own strokes (arcs as arcs, double precision, file order;
   :mod:`.exact_curves`); :func:`stored_pattern` gives back an unedited FOLD import's pattern.
 * :func:`read_blend_file` does the same for every role-carrying curve object of a ``.blend`` file on disk (the
-  ``.blend`` input of ``core.reader``), without changing the file open in Blender.
+  ``.blend`` input of ``core.io.reader``), without changing the file open in Blender.
 * :func:`objects_from_curves` is the inverse, used by the Import operator: one curve object per role and fold
   angle, one spline per chain of strokes (Poly for lines only, else Bézier with arcs as ≤ 90° cubic pieces).
 

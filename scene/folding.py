@@ -76,7 +76,7 @@ def curve_objects(objects) -> list[bpy.types.Object]:
 
 
 def solver_settings(props, *, max_iterations: int | None = None):
-    """``core.solver.SolverSettings`` from a fold object's settings (defaults when ``props`` is None);
+    """``core.solve.solver.SolverSettings`` from a fold object's settings (defaults when ``props`` is None);
     ``max_iterations`` caps the solver (live re-folds)."""
     from ..core.solve.solver import SolverSettings
 

@@ -1,6 +1,6 @@
 """Import a crease pattern file (SVG, FOLD) as a handful of editable curve objects with their crease roles set.
 
-SVG strokes keep their exact geometry (lines, cubics, arcs) from ``core.svg.read_svg``; a FOLD file holds straight
+SVG strokes keep their exact geometry (lines, cubics, arcs) from ``core.io.svg.read_svg``; a FOLD file holds straight
 segments only, so its edges are chained into polylines (``core.pattern.polylines``). The objects are made by
 ``scene.curves.objects_from_curves``: one object per role and fold angle, one spline per chain of strokes joined end
 to end, and the exact strokes stored on each object (``scene.exact_curves``) so that folding the imported, unedited
@@ -19,7 +19,7 @@ from ..core.io.reader import read_curves
 from ..core.pattern.model import PatternError
 
 SUFFIXES = (".svg", ".fold")
-"""The files the Import operator reads (``core.reader.read_curves`` also reads .blend, which Blender opens itself)."""
+"""The files the Import operator reads (``core.io.reader.read_curves`` also reads .blend, which Blender opens itself)."""
 
 
 def import_crease_pattern(

@@ -205,7 +205,7 @@ class ParabolaStrip:
         return np.stack([x, x * x / (2.0 * self.p)], axis=-1)
 
     def pattern(self) -> CreasePattern:
-        """The discretised pattern (needs ``core.discretize``, the INPUT helper's module)."""
+        """The discretised pattern (needs ``core.pattern.discretize``, the INPUT helper's module)."""
         from curved_fold.core.pattern.discretize import discretize
 
         return discretize(self.curves, interval=self.interval, tolerance=self.tolerance)
@@ -313,7 +313,7 @@ class AnnularSector:
     curves: list[CreaseCurve] = field(default_factory=list)
 
     def pattern(self, interval: float | None = None, tolerance: float | None = None) -> CreasePattern:
-        """The discretised pattern (needs ``core.discretize``, the INPUT helper's module)."""
+        """The discretised pattern (needs ``core.pattern.discretize``, the INPUT helper's module)."""
         from curved_fold.core.pattern.discretize import discretize
 
         return discretize(self.curves, interval=interval, tolerance=tolerance)

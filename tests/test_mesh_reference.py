@@ -1,6 +1,6 @@
 """The optimised mesh generation gives exactly the meshes of the first, straightforward implementation.
 
-``core.triangulate``/``core.ruling``/``core.earcut``/``core.meshing`` were rewritten for speed and checked array by
+``core.mesh.triangulate``/``core.mesh.ruling``/``core.mesh.earcut``/``core.mesh.build`` were rewritten for speed and checked array by
 array against a frozen copy of the first implementation; the digests of that implementation's results are stored in
 ``tests/data/mesh_digests.json`` (see :mod:`tests.mesh_digests`). These tests recompute them from the current code on
 every fixture and example, on hand-made cases with cocircular ties and holes, and on random polygons for ear clipping.
@@ -33,7 +33,7 @@ def test_same_meshes_as_reference_on_inputs(path) -> None:
     assert recorded is not None, f"{path.name}: no recorded digest; regenerate tests/data/mesh_digests.json"
     pat = read_pattern(path)
     assert md.pattern_digest(pat) == recorded["pattern"], (
-        f"{path.name}: the discretised pattern changed since the digests were recorded (core.discretize/core.svg), "
+        f"{path.name}: the discretised pattern changed since the digests were recorded (core.discretize/core.io.svg), "
         "so the mesh digests no longer apply; check the change and regenerate them (tests/mesh_digests.py)"
     )
     for backend in md.BACKENDS:

@@ -1,4 +1,4 @@
-"""Ruling-aware edge swaps (core.ruling, paper §3.3) on the exact bisector case, hand-made cases and fixtures."""
+"""Ruling-aware edge swaps (core.mesh.ruling, paper §3.3) on the exact bisector case, hand-made cases and fixtures."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ def _edge_set(tris: np.ndarray) -> set[tuple[int, int]]:
 
 
 def _flip(tris: np.ndarray, a: int, b: int) -> np.ndarray | None:
-    """Flip edge ab if its quad is strictly convex (test helper, independent of core.ruling)."""
+    """Flip edge ab if its quad is strictly convex (test helper, independent of core.mesh.ruling)."""
     t1 = [i for i, t in enumerate(tris.tolist()) if a in t and b in t]
     if len(t1) != 2:
         return None
@@ -107,7 +107,7 @@ def _facet_valence(mesh) -> dict[tuple[int, int], int]:
 
 @pytest.mark.parametrize("path", SVGS, ids=[p.name for p in SVGS])
 def test_fixture_swaps_terminate_valid_and_respect_valence(path: Path) -> None:
-    reader = pytest.importorskip("curved_fold.core.io.reader", reason="core.reader (INPUT helper) not available")
+    reader = pytest.importorskip("curved_fold.core.io.reader", reason="core.io.reader (INPUT helper) not available")
     pat = reader.read_pattern(path)
     cdt = build_mesh(pat, "cdt")
     mesh = build_mesh(pat, "ruling")

@@ -17,7 +17,7 @@ from curved_fold.core.pattern.model import CurveSegment, PatternError
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 FIXTURE_FILES = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
 
-# Independent colour table (origami-simulator-model.md §5.1), used to count the files' elements without core.svg.
+# Independent colour table (origami-simulator-model.md §5.1), used to count the files' elements without core.io.svg.
 COLOUR_TABLE = {
     **dict.fromkeys(["#000000", "#000", "black", "rgb(0,0,0)"], "B"),
     **dict.fromkeys(["#ff0000", "#f00", "red", "rgb(255,0,0)"], "M"),

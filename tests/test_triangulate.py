@@ -1,4 +1,4 @@
-"""Constrained Delaunay triangulation (core.triangulate) and the mesh builder (core.meshing), on hand-made
+"""Constrained Delaunay triangulation (core.mesh.triangulate) and the mesh builder (core.mesh.build), on hand-made
 patterns, the analytic cases and the Origami Simulator fixtures."""
 
 from __future__ import annotations
@@ -156,7 +156,7 @@ def test_bisector_case_mesh_complete() -> None:
 
 
 def _fixture_pattern(path: Path):
-    reader = pytest.importorskip("curved_fold.core.io.reader", reason="core.reader (INPUT helper) not available")
+    reader = pytest.importorskip("curved_fold.core.io.reader", reason="core.io.reader (INPUT helper) not available")
     return reader.read_pattern(path)
 
 

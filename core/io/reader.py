@@ -99,7 +99,7 @@ def read_input_bytes(path: str | os.PathLike[str], kind: str) -> bytes:
 
 def read_curves(path: str | os.PathLike[str]) -> tuple[list[CreaseCurve], list[str]]:
     """The crease curves of a file and the warnings met reading them: exact curves from .svg and .blend, polylines
-    (segments chained through vertices where two meet, ``core.polylines``) from .fold."""
+    (segments chained through vertices where two meet, ``core.pattern.polylines``) from .fold."""
     p = Path(path)
     suffix = _suffix(p)
     if suffix == ".svg":
@@ -125,7 +125,7 @@ def read_pattern(
 ) -> CreasePattern:
     """Read and discretise a crease pattern (.svg, .blend) or read a discretised one (.fold).
 
-    Discretisation parameters are in mm; ``None`` means the scale-aware defaults (see ``core.discretize``).
+    Discretisation parameters are in mm; ``None`` means the scale-aware defaults (see ``core.pattern.discretize``).
     They are ignored for FOLD files, which are already straight segments. Warnings from reading come first in
     the pattern's ``warnings``.
     """

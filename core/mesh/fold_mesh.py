@@ -1,7 +1,7 @@
 """The triangle mesh the solver folds (paper §3.2–3.3 output), as plain arrays.
 
-A :class:`FoldMesh` is built from a :class:`~.pattern.CreasePattern` by ``core.triangulate`` (constrained
-Delaunay, no interior points) and ``core.ruling`` (edge swaps along estimated rulings). It carries everything later
+A :class:`FoldMesh` is built from a :class:`~.pattern.CreasePattern` by ``core.mesh.triangulate`` (constrained
+Delaunay, no interior points) and ``core.mesh.ruling`` (edge swaps along estimated rulings). It carries everything later
 stages need: the flat positions, consistently oriented triangles, every triangle side as an edge with its
 assignment and target fold angle, and the crease-pattern face each triangle came from (the warp angle walks
 along that face's boundary).

@@ -254,7 +254,7 @@ def characteristic_force(model: BarHingeModel, crease_stiffness: float, panel_st
 
 
 def hessian_matvec(model: BarHingeModel, ev: Evaluation, v: np.ndarray) -> np.ndarray:
-    """Gauss–Newton Hessian (the PSD blocks of ``ev``, see ``core.solver_newton``) times ``v`` (``(n, 3)``).
+    """Gauss–Newton Hessian (the PSD blocks of ``ev``, see ``core.solve.newton``) times ``v`` (``(n, 3)``).
 
     Element by element, without assembling a matrix: bars ``K_b (v_j − v_i)``, hinges ``k ∇θ (∇θ·v)``, faces
     ``k_f Σ ∇α (∇α·v)``. Used by the power iteration of the time-step bound and by preconditioned CG.

@@ -1,6 +1,6 @@
 """The fast equilibrium solver: Levenberg–Marquardt-damped Gauss–Newton on the bar-and-hinge energy.
 
-It minimises the same energy as the faithful integrator (``core.forces``) directly instead of integrating damped
+It minimises the same energy as the faithful integrator (``core.solve.forces``) directly instead of integrating damped
 dynamics towards it. Each iteration:
 
 1. evaluates the exact forces ``F = −∇E`` and the per-element Jacobians;
@@ -8,7 +8,7 @@ dynamics towards it. Each iteration:
    (the geometric term is kept where it is positive), ``k ∇θ ∇θᵀ`` per hinge, ``k_f ∇α ∇αᵀ`` per face corner;
 3. solves ``(H + λ I) p = F`` (``λ`` is the Levenberg–Marquardt damping, which also removes the six rigid-body null
    modes) by conjugate gradients with matrix-free products ``H v`` (``forces.hessian_matvec``), preconditioned by a
-   block-tridiagonal factorisation (``core.solver_linalg``) of an *earlier* ``H + λ I``. The factorisation is
+   block-tridiagonal factorisation (``core.solve.linalg``) of an *earlier* ``H + λ I``. The factorisation is
    rebuilt only when CG needs more than ``PCG_MAX`` iterations, so warm-started solves (animation frames, later
    Newton iterations) mostly cost a few matrix-vector products instead of an assembly and a factorisation;
 4. accepts ``x + a p`` by an Armijo backtracking line search on the energy (θ unwrapped against the current θ),

@@ -1,9 +1,9 @@
 """Public solver API: fold a :class:`~.mesh.FoldMesh` to equilibrium with Origami Simulator's model.
 
-Methods (all minimise/settle the same energy, ``core.forces``):
+Methods (all minimise/settle the same energy, ``core.solve.forces``):
 
-* ``"fast"`` — damped Gauss–Newton with a numpy-only block-tridiagonal linear solver (``core.solver_newton``);
-* ``"faithful"`` — Origami Simulator's explicit damped dynamics (``core.solver_faithful``), run until the residual
+* ``"fast"`` — damped Gauss–Newton with a numpy-only block-tridiagonal linear solver (``core.solve.newton``);
+* ``"faithful"`` — Origami Simulator's explicit damped dynamics (``core.solve.faithful``), run until the residual
   criterion holds or the step/time cap is hit;
 * ``"isometric"`` — the fast solver with bars ``isometric_factor`` (1000×) stiffer, so the sheet barely stretches.
 

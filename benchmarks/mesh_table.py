@@ -193,7 +193,7 @@ NOTES = """![The three meshes of one single-curve pattern](img/meshes_single_cur
 border, grey: facets. (c) The swaps turn the Delaunay diagonals into rungs across the crease, roughly orthogonal to
 it.*
 
-## How the meshes are made (`core/mesh/triangulate.py`, `core/mesh/ruling.py`, `core/mesh/earcut.py`, `core/mesh/build.py`)
+## How the meshes are made (`core/mesh/`: `triangulate.py`, `ruling.py`, `earcut.py`, `build.py`)
 
 - **CDT** of the convex hull of the pattern vertices with every segment as a constraint; no Steiner points
   (`triangle` with switches `pcQ`, or `mathutils.geometry.delaunay_2d_cdt` output type 0). An added or merged

@@ -19,7 +19,8 @@ from ..core.io.reader import read_curves
 from ..core.pattern.model import PatternError
 
 SUFFIXES = (".svg", ".fold")
-"""The files the Import operator reads (``core.io.reader.read_curves`` also reads .blend, which Blender opens itself)."""
+"""The files the Import operator reads (``core.io.reader.read_curves`` also reads .blend, which Blender opens
+itself)."""
 
 
 def import_crease_pattern(

@@ -1,7 +1,7 @@
 """Digests of the meshes the first, straightforward mesh code produced, to pin the optimised code to them.
 
-``core.mesh.triangulate``/``core.mesh.ruling``/``core.mesh.earcut`` were rewritten for speed (array half-edges, vectorised region
-and face-loop finding, a heap over array-evaluated swap candidates, cached ear tests) and checked array by array
+``core.mesh.triangulate``/``core.mesh.ruling``/``core.mesh.earcut`` were rewritten for speed (array half-edges,
+vectorised region and face-loop finding, a heap over array-evaluated swap candidates, cached ear tests) and checked array by array
 against a frozen copy of the first implementation (commit 7b169e4). Instead of keeping that copy, the digests of its
 results are stored in ``tests/data/mesh_digests.json``; ``tests/test_mesh_reference.py`` recomputes them from the
 current code. A digest covers every array of the mesh (triangles as a set with their winding, edges, assignments,

@@ -1,9 +1,9 @@
 """Curves → pattern → mesh → equilibrium, with the paper's report (paper §3–4, Table 1 columns).
 
 :func:`fold_pattern` is what the CLI, the operators and the benchmarks call. It fills missing crease angles
-(``angle``), builds the mesh (``core.mesh.build.build_mesh``), solves (``core.solve.solver``) and measures the
-result with ``core.metrics.measures.summary``. :func:`refold_mesh` re-solves an already built mesh (the operators' re-fold and live
-paths) and reports the same figures, including the "does not fold as assigned" verdict (paper Fig. 7).
+(``angle``), builds the mesh (``core.mesh.build.build_mesh``), solves (``core.solve.solver``) and measures the result
+with ``core.metrics.measures.summary``. :func:`refold_mesh` re-solves an already built mesh (the operators' re-fold
+and live paths) and reports the same figures, including the "does not fold as assigned" verdict (paper Fig. 7).
 """
 
 from __future__ import annotations

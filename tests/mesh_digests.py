@@ -1,11 +1,11 @@
 """Digests of the meshes the first, straightforward mesh code produced, to pin the optimised code to them.
 
 ``core.mesh.triangulate``/``core.mesh.ruling``/``core.mesh.earcut`` were rewritten for speed (array half-edges,
-vectorised region and face-loop finding, a heap over array-evaluated swap candidates, cached ear tests) and checked array by array
-against a frozen copy of the first implementation (commit 7b169e4). Instead of keeping that copy, the digests of its
-results are stored in ``tests/data/mesh_digests.json``; ``tests/test_mesh_reference.py`` recomputes them from the
-current code. A digest covers every array of the mesh (triangles as a set with their winding, edges, assignments,
-fold angles, curve flags, polylines, faces as cycles, swap count), so any change of result shows.
+vectorised region and face-loop finding, a heap over array-evaluated swap candidates, cached ear tests) and checked
+array by array against a frozen copy of the first implementation (commit 7b169e4). Instead of keeping that copy, the
+digests of its results are stored in ``tests/data/mesh_digests.json``; ``tests/test_mesh_reference.py`` recomputes
+them from the current code. A digest covers every array of the mesh (triangles as a set with their winding, edges,
+assignments, fold angles, curve flags, polylines, faces as cycles, swap count), so any change of result shows.
 
 The digests hold on numpy 1.26 and 2.x and on any x86-64 CPU because mesh generation uses only correctly rounded
 arithmetic and libm's atan2, never numpy's ``power``/``arctan2`` (docs/packaging.md, "Same meshes on numpy 1.26 and

@@ -1,9 +1,10 @@
 """The optimised mesh generation gives exactly the meshes of the first, straightforward implementation.
 
 ``core.mesh.triangulate``/``core.mesh.ruling``/``core.mesh.earcut``/``core.mesh.build`` were rewritten for speed and
-checked array by array against a frozen copy of the first implementation; the digests of that implementation's results are stored in
-``tests/data/mesh_digests.json`` (see :mod:`tests.mesh_digests`). These tests recompute them from the current code on
-every fixture and example, on hand-made cases with cocircular ties and holes, and on random polygons for ear clipping.
+checked array by array against a frozen copy of the first implementation; the digests of that implementation's results
+are stored in ``tests/data/mesh_digests.json`` (see :mod:`tests.mesh_digests`). These tests recompute them from the
+current code on every fixture and example, on hand-made cases with cocircular ties and holes, and on random polygons
+for ear clipping.
 """
 
 from __future__ import annotations

@@ -26,8 +26,11 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _enable_blend_files() -> None:
-    """Register the .blend reader of the Blender layer when ``bpy`` can be imported (it cannot in plain Python)."""
+def _enable_blend_files(args: argparse.Namespace) -> None:
+    """For a .blend input, register the Blender layer's .blend reader when ``bpy`` can be imported (it cannot in
+    plain Python). Other inputs do not load Blender at all (it costs start-up time and memory)."""
+    if not str(getattr(args, "input", "")).lower().endswith(".blend"):
+        return
     try:
         from ..scene import curves  # noqa: F401  (registers scene.curves.read_blend_file with core.io.reader)
     except ImportError:
@@ -45,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = build_parser()
     args = parser.parse_args(argv)
-    _enable_blend_files()
+    _enable_blend_files(args)
     previous = install_signal_cleanup()
     try:
         return int(args.func(args) or 0)

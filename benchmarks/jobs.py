@@ -16,6 +16,17 @@ import numpy as np
 from .common import FIXTURES, load_average
 
 
+def _run_timed(jobs, job, budget: float) -> float:
+    """Run ``job`` slice by slice to its end, as the modal operator does; returns the longest slice in ms."""
+    longest = 0.0
+    while True:
+        ts = time.perf_counter()
+        ended = jobs.run_slice(job, budget)
+        longest = max(longest, 1e3 * (time.perf_counter() - ts))
+        if ended:
+            return longest
+
+
 def _fold(bpy, folding, jobs, path, budget_ms):
     coll_before = set(bpy.data.collections)
     from ..scene.import_curves import import_crease_pattern
@@ -91,13 +102,7 @@ def main(argv=None) -> int:
         frames = list(range(1, args.frames + 1))
         t0 = time.perf_counter()
         job = jobs.start(bake.bake_job(ob, frames))
-        longest = 0.0
-        while True:
-            ts = time.perf_counter()
-            ended = jobs.run_slice(job, budget)
-            longest = max(longest, 1e3 * (time.perf_counter() - ts))
-            if ended:
-                break
+        longest = _run_timed(jobs, job, budget)
         summary = job.result
         print(
             f"\nbake CircularPleat-antiFacet ({n_faces} faces, {args.bake_from}), {len(frames)} frames 0 → 100 %: "
@@ -131,13 +136,7 @@ def main(argv=None) -> int:
                 live=True,
             )
         )
-        longest = 0.0
-        while True:
-            ts = time.perf_counter()
-            ended = jobs.run_slice(job, budget)
-            longest = max(longest, 1e3 * (time.perf_counter() - ts))
-            if ended:
-                break
+        longest = _run_timed(jobs, job, budget)
         res = job.result
         print(
             f"live re-fold Treble_Clef after a {mode} edit: {time.perf_counter() - t0:.2f} s wall, "

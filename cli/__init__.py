@@ -26,13 +26,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _enable_blend_files(args: argparse.Namespace) -> None:
-    """For a .blend input, register the Blender layer's .blend reader when ``bpy`` can be imported (it cannot in
-    plain Python). Other inputs do not load Blender at all (it costs start-up time and memory)."""
-    if not str(getattr(args, "input", "")).lower().endswith(".blend"):
+def _load_blender(args: argparse.Namespace) -> None:
+    """Load Blender's ``bpy`` up front when this run needs it — a .blend input (registers the Blender layer's .blend
+    reader) or an output only Blender's exporters write (.glb, .obj, .stl, .blend) — before the signal handlers are
+    installed: a SIGTERM arriving while ``bpy`` registers its bundled add-ons would be swallowed by their error
+    handling. Other runs (.svg/.fold in, .fold out) never load Blender: it costs start-up time and memory."""
+    paths = [str(getattr(args, "input", "")), str(getattr(args, "out", "") or "")]
+    if not any(p.lower().endswith((".blend", ".glb", ".gltf", ".obj", ".stl")) for p in paths):
         return
     try:
-        from ..scene import curves  # noqa: F401  (registers scene.curves.read_blend_file with core.io.reader)
+        from ..scene import curves, export  # noqa: F401  (curves registers read_blend_file with core.io.reader)
     except ImportError:
         pass
 
@@ -48,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = build_parser()
     args = parser.parse_args(argv)
-    _enable_blend_files(args)
+    _load_blender(args)
     previous = install_signal_cleanup()
     try:
         return int(args.func(args) or 0)

@@ -98,8 +98,9 @@ def _draw_pattern(ax, svg: Path) -> None:
     ax.set_title("crease pattern", fontsize=11)
 
 
-def make_picture(svg: Path, png: Path) -> None:
-    """Import ``svg`` through the add-on's operators, fold it, render it with Workbench and write the picture."""
+def _fold_with_operators(svg: Path):
+    """Import ``svg`` and fold it at 100 % through the add-on's operators; the curves are hidden from renders and the
+    folded object is paper-coloured. Returns the folded object."""
     import bpy
 
     sys.path.insert(0, str(IMG))
@@ -110,10 +111,21 @@ def make_picture(svg: Path, png: Path) -> None:
     curves = list(bpy.context.selected_objects)
     assert bpy.ops.curved_fold.fold(fold_percent=100.0) == {"FINISHED"}
     ob = bpy.context.active_object
-    props = ob.curved_fold_mesh
     for c in curves:
         c.hide_render = True
     ob.color = (0.93, 0.9, 0.82, 1)
+    return ob
+
+
+def make_picture(svg: Path, png: Path) -> None:
+    """Import ``svg`` through the add-on's operators, fold it, render it with Workbench and write the picture."""
+    import bpy
+
+    sys.path.insert(0, str(IMG))
+    import make_pictures  # the operators helper's render recipe (camera framing, Workbench settings)
+
+    ob = _fold_with_operators(svg)
+    props = ob.curved_fold_mesh
     bpy.context.view_layer.update()
     make_pictures.camera_for([ob], direction=(0.55, -1.0, 0.85), margin=1.08)
     with tempfile.TemporaryDirectory() as tmp:
@@ -184,17 +196,10 @@ def make_pins_picture(svg: Path, png: Path) -> None:
     sys.path.insert(0, str(IMG))
     import make_pictures
 
-    make_pictures.setup_addon()
     from curved_fold.scene import mesh_object, pins
 
-    assert bpy.ops.curved_fold.import_pattern(filepath=str(svg)) == {"FINISHED"}
-    curves = list(bpy.context.selected_objects)
-    assert bpy.ops.curved_fold.fold(fold_percent=100.0) == {"FINISHED"}
-    ob = bpy.context.active_object
+    ob = _fold_with_operators(svg)
     props = ob.curved_fold_mesh
-    for c in curves:
-        c.hide_render = True
-    ob.color = (0.93, 0.9, 0.82, 1)
     open_figures = f"creases alone: open, {props.last_iterations} iterations"
     flat = np.empty(2 * len(ob.data.vertices), np.float32)
     ob.data.attributes["cf_flat"].data.foreach_get("vector", flat)

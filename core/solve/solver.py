@@ -27,7 +27,7 @@ from .faithful import SolverError, faithful_solve, time_step
 from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
 from .model import BarHingeModel, build_model, with_glue
-from .newton import PIN_DIAGONAL, TAIL_RESIDUAL, HessianAssembler, newton_steps
+from .newton import PIN_DIAGONAL, TAIL_RESIDUAL, HessianAssembler, newton_steps, rigid_shift
 
 METHODS = ("fast", "faithful", "isometric")
 
@@ -345,6 +345,8 @@ class Solver:
         shift = np.full(3 * self.model.n_nodes, 1e-7 * self.force_scale)
         if self.constraints is not None:  # pinned degrees of freedom are not free to go anywhere: decouple them
             shift += self.constraints.fixed_mask(self.model.n_nodes).reshape(-1) * PIN_DIAGONAL * self.force_scale
+        else:  # the rigid rotations' curvature, ∝ the residual force, is not a buckling mode
+            shift += rigid_shift(x, ev.forces)
         try:
             return self.assembler.matrix.factor(H, shift, inertia=True).negative_pivots
         except np.linalg.LinAlgError:

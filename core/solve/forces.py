@@ -347,6 +347,84 @@ def hinge_angle_gradient(x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.
     return np.stack([g1, g2, g3, g4], axis=1)
 
 
+def _hinge_curvature_factors(
+    x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.ndarray, ok: np.ndarray, spare: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """``∇²θ`` of every hinge as a sum of eight outer products: ``X``, ``Y`` ``(m, spare + 8, 12)`` with
+    ``∇²θ = Σ_k X[k] Y[k]ᵀ`` (12 = node × component, nodes wing 1, wing 2, edge node 1, edge node 2); the first
+    ``spare`` rows are zeros for the caller's own terms (one ``matmul`` then sums everything).
+
+    The closed form of the Jacobian of :func:`hinge_angle_gradient` (same n/h and foot-fraction formula, same signs),
+    from differentiating ``g_w = n_w/h_w`` and the foot fractions ``t_w`` directly (equivalent to the dihedral-angle
+    Hessian of Tamstorf & Grinspun 2013, "Discrete bending forces and their Jacobians", written per wing). Per wing
+    ``w`` (unit normal ``n``, moment arm ``h``, ``m`` the unit vector in the face from the crease line to the wing,
+    ``ê`` along the crease, length ``L``): the unit normal of a triangle moves by ``δn = −Σ_b ∇λ_b (n·δx_b)``
+    (``λ_b`` its barycentric coordinates, so ``∇λ_wing = m/h``, ``∇λ_v1 = −ê/L − (1 − t) m/h``,
+    ``∇λ_v2 = ê/L − t m/h``), ``∂h = m·(δx_wing − (1 − t) δx_v1 − t δx_v2)`` and ``∂t/∂x_v2 = (h m/L − t ê)/L``,
+    ``∂t/∂x_wing = ê/L``, ``∂t/∂x_v1 = −∂t/∂x_wing − ∂t/∂x_v2``.
+    With the node coefficients of the wing in ``∇θ = Σ_w c⊗n/h``, ``c = (1 at the wing, 0 at the other wing,
+    −(1 − t), −t)``, and ``d = (0, 0, −1, 1)`` this gives ::
+
+        ∇²θ = −Σ_w [ (c⊗m)(c⊗n)ᵀ/h² + (c⊗n)(c⊗m)ᵀ/h² + (c⊗ê)(d⊗n)ᵀ/(L h) + (d⊗n)(c⊗ê)ᵀ/(L h) + (d⊗n)(d⊗m)ᵀ/L² ]
+
+    (the last term is not symmetric per wing; its antisymmetric parts cancel between the two wings, since
+    ``n1 = ê × m1`` and ``n2 = m2 × ê``). Hinges not ``ok`` (edge or a moment arm below ``HINGE_EPS``) get finite
+    values from unit placeholders; callers weight them by zero.
+    """
+    e = x4 - x3
+    L = np.sqrt(_rows_dot(e, e))
+    Ls = np.where(ok, L, 1.0)
+    chat = e / Ls[:, None]
+    X = np.zeros((len(e), spare + 8, 4, 3))
+    Y = np.zeros((len(e), spare + 8, 4, 3))
+    for w, xw in enumerate((x1, x2)):
+        r = xw - x3
+        p = _rows_dot(chat, r)
+        perp = r - p[:, None] * chat
+        h = np.sqrt(_rows_dot(perp, perp))
+        hs = np.where(ok, h, 1.0)
+        m = perp / hs[:, None]
+        n = _cross(chat, m) if w == 0 else _cross(m, chat)
+        t = p / Ls
+        c = np.zeros((len(e), 4))
+        c[:, w] = 1.0
+        c[:, 2], c[:, 3] = t - 1.0, -t
+        n_h = n / hs[:, None]
+        c_m, c_n, c_e = (c[:, :, None] * v[:, None, :] for v in (-m / hs[:, None], n_h, chat / Ls[:, None]))
+        k = spare + 4 * w
+        # the overall minus sign rides on c_m and on the d⊗n factors (d = (0, 0, −1, 1), so −d⊗n = (0, 0, n, −n))
+        X[:, k], Y[:, k] = c_m, c_n
+        X[:, k + 1], Y[:, k + 1] = c_n, c_m
+        X[:, k + 2] = c_e
+        Y[:, k + 2, 2], Y[:, k + 2, 3] = n_h, -n_h
+        X[:, k + 3, 2], X[:, k + 3, 3] = n_h, -n_h
+        Y[:, k + 3] = c_e
+        tail = (hs / (Ls * Ls))[:, None] * m
+        Y[:, k + 3, 2] -= tail
+        Y[:, k + 3, 3] += tail
+    return X.reshape(len(e), spare + 8, 12), Y.reshape(len(e), spare + 8, 12)
+
+
+def hinge_angle_hessian(
+    x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.ndarray, weight: np.ndarray | None = None
+) -> np.ndarray:
+    """``weight · ∇²θ`` ``(m, 4, 4, 3, 3)``, rows ``[node a, node b, i, j]`` (nodes wing 1, wing 2, edge node 1,
+    edge node 2), in closed form (:func:`_hinge_curvature_factors`); the Jacobian of :func:`hinge_angle_gradient`.
+
+    Degenerate hinges (edge or a moment arm below ``HINGE_EPS``) get zeros, as :func:`evaluate` skips them.
+    The result is a transposed view of ``(m, 4, 3, 4, 3)`` storage.
+    """
+    r1, r2, e = x1 - x3, x2 - x3, x4 - x3
+    L2 = _rows_dot(e, e)
+    h1sq = _rows_dot(r1, r1) - _rows_dot(r1, e) ** 2 / np.where(L2 > 0, L2, 1.0)
+    h2sq = _rows_dot(r2, r2) - _rows_dot(r2, e) ** 2 / np.where(L2 > 0, L2, 1.0)
+    ok = (L2 >= HINGE_EPS**2) & (np.abs(h1sq) >= HINGE_EPS**2) & (np.abs(h2sq) >= HINGE_EPS**2)
+    X, Y = _hinge_curvature_factors(x1, x2, x3, x4, ok)
+    w = ok.astype(np.float64) if weight is None else np.where(ok, weight, 0.0)
+    X *= w[:, None, None]
+    return np.matmul(X.transpose(0, 2, 1), Y).reshape(len(e), 4, 3, 4, 3).transpose(0, 1, 3, 2, 4)
+
+
 def corner_angle_gradient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     """``∂α_corner/∂x_node`` ``(m, 3, 3, 3)`` of the three corner angles of triangles ``(a, b, c)`` (reference §3.5),
     with analytic operations only (for complex-step differentiation)."""
@@ -440,9 +518,11 @@ def exact_hessian_blocks(
 
     Returns ``(bars (b, 3, 3), hinges (h, 4, 4, 3, 3), faces (t, 3, 3, 3, 3))``, rows ``[node a, node b, i, j]``:
     bars ``k (d̂d̂ᵀ + (1 − L0/ℓ)(I − d̂d̂ᵀ))`` (the geometric term also where it is negative), hinges
-    ``k ∇θ∇θᵀ + k (θ − θ̄) ∇²θ``, faces ``Σ_corners φ''(α) ∇α∇αᵀ + φ'(α) ∇²α``. ``∇²θ`` is the complex-step
-    Jacobian of :func:`hinge_angle_gradient`, ``∇²α`` is in closed form (:func:`_corner_curvature`). The Gauss–Newton
-    matrix is these without the curvature terms (``θ − θ̄``, ``φ'``) and with the negative bar term dropped.
+    ``k ∇θ∇θᵀ + k (θ − θ̄) ∇²θ``, faces ``Σ_corners φ''(α) ∇α∇αᵀ + φ'(α) ∇²α``. ``∇²θ``
+    (:func:`_hinge_curvature_factors`) and ``∇²α`` (:func:`_corner_curvature`) are in closed form. The Gauss–Newton
+    matrix is these without the curvature terms (``θ − θ̄``, ``φ'``) and with the negative bar term dropped. The
+    hinge blocks are a transposed view of ``(h, 4, 3, 4, 3)`` storage (``HessianAssembler.assemble_exact`` scatters
+    them without a copy).
     """
     i, j = model.bar_nodes[:, 0], model.bar_nodes[:, 1]
     dhat, ell = _unit(x[j] - x[i])
@@ -451,15 +531,17 @@ def exact_hessian_blocks(
     bars = model.bar_k[:, None, None] * (outer + geo[:, None, None] * (np.eye(3) - outer))
     hinges = faces = None
     if ev.hinge_grad is not None and len(model.hinge_k):
-        g, k = ev.hinge_grad, ev.hinge_k
-        hinges = k[:, None, None, None, None] * g[:, :, None, :, None] * g[:, None, :, None, :]
-        active = np.flatnonzero((k != 0) & (ev.hinge_dev != 0))
-        if len(active):
-            nodes = np.column_stack([model.hinge_wings, model.hinge_edge_nodes])[active]
-            d2 = _complex_step_jacobian(hinge_angle_gradient, x[nodes])  # (m, 4, 3, 4, 3): [a, i, b, j]
-            hinges[active] += (k[active] * ev.hinge_dev[active])[:, None, None, None, None] * d2.transpose(
-                0, 1, 3, 2, 4
-            )
+        m, k = len(model.hinge_k), ev.hinge_k
+        x1, x2 = x[model.hinge_wings[:, 0]], x[model.hinge_wings[:, 1]]
+        x3, x4 = x[model.hinge_edge_nodes[:, 0]], x[model.hinge_edge_nodes[:, 1]]
+        # k ∇θ∇θᵀ + k (θ − θ̄) ∇²θ as one batched product of (12 × 9)(9 × 12) factors: the Gauss–Newton term
+        # first, then the eight terms of ∇²θ (zero weight where k = 0: skipped hinges)
+        X, Y = _hinge_curvature_factors(x1, x2, x3, x4, k != 0, spare=1)
+        X[:, 1:] *= (k * ev.hinge_dev)[:, None, None]
+        g = ev.hinge_grad.reshape(m, 12)
+        X[:, 0] = k[:, None] * g
+        Y[:, 0] = g
+        hinges = np.matmul(X.transpose(0, 2, 1), Y).reshape(m, 4, 3, 4, 3).transpose(0, 1, 3, 2, 4)
     if ev.face_grad is not None:
         fg = ev.face_grad
         faces = np.einsum("tc,tcai,tcbj->tabij", ev.face_ddphi, fg, fg)

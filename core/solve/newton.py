@@ -107,18 +107,28 @@ class HessianAssembler:
         return self.matrix.assemble(np.concatenate(idx), np.concatenate(vals))
 
     def assemble_exact(self, x: np.ndarray, ev: Evaluation) -> np.ndarray:
-        """Exact Hessian storage (``forces.exact_hessian_blocks``) at ``x``; ``ev`` made with ``jacobians=True``."""
+        """Exact Hessian storage (``forces.exact_hessian_blocks``) at ``x``; ``ev`` made with ``jacobians=True``.
+
+        The hinge blocks are scattered in their storage order ``[h, a, i, b, j]`` (no transposing copy) and the
+        concatenated scatter index is made once per model and kept.
+        """
         bars, hinges, faces = exact_hessian_blocks(self.model, x, ev)
-        idx = [self.bar_index.reshape(-1)]
+        key = (hinges is not None, faces is not None)
+        cached = getattr(self, "_exact_index", None)
+        if cached is None or cached[0] != key:
+            idx = [self.bar_index.reshape(-1)]
+            if hinges is not None:
+                idx.append(self.hinge_index.transpose(0, 1, 3, 2, 4).reshape(-1))
+            if faces is not None:
+                idx.append(self.face_index.reshape(-1))
+            cached = self._exact_index = (key, np.concatenate(idx))
         vals = [np.concatenate([bars, bars, -bars, -bars]).reshape(-1)]
         if hinges is not None:
-            idx.append(self.hinge_index.reshape(-1))
-            vals.append(hinges.reshape(-1))
+            vals.append(hinges.transpose(0, 1, 3, 2, 4).reshape(-1))
         if faces is not None:
-            idx.append(self.face_index.reshape(-1))
             vals.append(faces.reshape(-1))
         self.assemblies += 1
-        return self.matrix.assemble(np.concatenate(idx), np.concatenate(vals))
+        return self.matrix.assemble(cached[1], np.concatenate(vals))
 
 
 @dataclass

@@ -109,26 +109,31 @@ class HessianAssembler:
     def assemble_exact(self, x: np.ndarray, ev: Evaluation) -> np.ndarray:
         """Exact Hessian storage (``forces.exact_hessian_blocks``) at ``x``; ``ev`` made with ``jacobians=True``.
 
-        The hinge blocks are scattered in their storage order ``[h, a, i, b, j]`` (no transposing copy) and the
-        concatenated scatter index is made once per model and kept.
+        The element blocks are scattered in the order they are computed in (hinges and faces ``[e, a, i, b, j]``,
+        no transposing copy); the concatenated scatter index and the scratch arrays (``work``) are made on the first
+        call and kept.
         """
-        bars, hinges, faces = exact_hessian_blocks(self.model, x, ev)
+        work = getattr(self, "_exact_work", None)
+        if work is None:
+            work = self._exact_work = {}
+        bars, hinges, faces = exact_hessian_blocks(self.model, x, ev, work)
         key = (hinges is not None, faces is not None)
-        cached = getattr(self, "_exact_index", None)
-        if cached is None or cached[0] != key:
+        if work.get("key") != key:
             idx = [self.bar_index.reshape(-1)]
             if hinges is not None:
                 idx.append(self.hinge_index.transpose(0, 1, 3, 2, 4).reshape(-1))
             if faces is not None:
-                idx.append(self.face_index.reshape(-1))
-            cached = self._exact_index = (key, np.concatenate(idx))
-        vals = [np.concatenate([bars, bars, -bars, -bars]).reshape(-1)]
+                idx.append(self.face_index.transpose(0, 1, 3, 2, 4).reshape(-1))
+            work["key"], work["index"] = key, np.concatenate(idx)
+            work["values"] = np.empty(len(work["index"]))
+        vals = [bars, bars, -bars, -bars]
         if hinges is not None:
-            vals.append(hinges.transpose(0, 1, 3, 2, 4).reshape(-1))
+            vals.append(hinges.transpose(0, 1, 3, 2, 4))
         if faces is not None:
-            vals.append(faces.reshape(-1))
+            vals.append(faces.transpose(0, 1, 3, 2, 4))
+        np.concatenate([v.reshape(-1) for v in vals], out=work["values"])
         self.assemblies += 1
-        return self.matrix.assemble(cached[1], np.concatenate(vals))
+        return self.matrix.assemble(work["index"], work["values"])
 
 
 @dataclass

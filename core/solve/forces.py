@@ -329,7 +329,8 @@ def hinge_angle_gradient(x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.
     """``∇θ`` ``(m, 4, 3)`` with respect to wing 1, wing 2, edge node 1, edge node 2 (reference §3.4).
 
     The same formula as :func:`evaluate` (``n/h`` on the wings, foot fractions ``t`` on the edge nodes), written
-    with analytic operations only so that complex-step differentiation gives its exact Jacobian ``∇²θ``.
+    with analytic operations only so that complex-step differentiation gives its exact Jacobian ``∇²θ``: the
+    reference the closed form (:func:`hinge_angle_hessian`) is tested against.
     """
     e = x4 - x3
     chat, L = _csqrt_unit(e)
@@ -473,7 +474,7 @@ def hinge_angle_hessian(
 
 def corner_angle_gradient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     """``∂α_corner/∂x_node`` ``(m, 3, 3, 3)`` of the three corner angles of triangles ``(a, b, c)`` (reference §3.5),
-    with analytic operations only (for complex-step differentiation)."""
+    with analytic operations only (for complex-step differentiation: the tests' reference for the face blocks)."""
     e_ab, l_ab = _csqrt_unit(b - a)
     e_ac, l_ac = _csqrt_unit(c - a)
     e_bc, l_bc = _csqrt_unit(c - b)
@@ -605,7 +606,7 @@ def exact_hessian_blocks(
         # k ∇θ∇θᵀ + k (θ − θ̄) ∇²θ in one batched product: the Gauss–Newton term first, then the eight terms of
         # ∇²θ (weight zero where k = 0: skipped hinges)
         X, Y = _hinge_curvature_factors(
-            xt[:, wings[:, 0]], xt[:, wings[:, 1]], xt[:, edge[:, 0]], xt[:, edge[:, 1]], k != 0, spare=1
+            xt[:, wings[:, 0]], xt[:, wings[:, 1]], xt[:, edge[:, 0]], xt[:, edge[:, 1]], k != 0, 1, work
         )
         X[1:] *= k * ev.hinge_dev
         g = ev.hinge_grad.reshape(m, 12).T.reshape(4, 3, m)

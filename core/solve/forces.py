@@ -346,7 +346,8 @@ def hinge_angle_gradient(x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.
     """``∇θ`` ``(m, 4, 3)`` with respect to wing 1, wing 2, edge node 1, edge node 2 (reference §3.4).
 
     The same formula as :func:`evaluate` (``n/h`` on the wings, foot fractions ``t`` on the edge nodes), written
-    with analytic operations only so that complex-step differentiation gives its exact Jacobian ``∇²θ``.
+    with analytic operations only so that complex-step differentiation gives its exact Jacobian ``∇²θ``: the
+    reference the closed form (:func:`hinge_angle_hessian`) is tested against.
     """
     e = x4 - x3
     chat, L = _csqrt_unit(e)
@@ -364,9 +365,133 @@ def hinge_angle_gradient(x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.
     return np.stack([g1, g2, g3, g4], axis=1)
 
 
+def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Column-wise dot product of ``(3, m)`` arrays (components first: every operation runs over ``m``)."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Column-wise cross product of ``(3, m)`` arrays."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def _scratch(work: dict[str, np.ndarray] | None, name: str, shape: tuple[int, ...], zero: bool = False) -> np.ndarray:
+    """Array ``work[name]`` of ``shape``, made on first use and reused by later calls (``zero``: cleared), or a new
+    array without ``work``. Reuse matters: a fresh array of megabytes costs its page faults on every call."""
+    if work is None:
+        return np.zeros(shape) if zero else np.empty(shape)
+    a = work.get(name)
+    if a is None or a.shape != shape:
+        a = work[name] = np.empty(shape)
+    if zero:
+        a.fill(0.0)
+    return a
+
+
+def _outer_sum(X: np.ndarray, Y: np.ndarray, work: dict[str, np.ndarray] | None = None, name: str = "") -> np.ndarray:
+    """``Σ_k X[k] Y[k]ᵀ`` per element: ``X``, ``Y`` ``(K, q, 3, m)`` (term, node, component, element) →
+    ``(m, q, q, 3, 3)`` rows ``[node a, node b, i, j]``, a transposed view of ``(m, q, 3, q, 3)`` storage
+    (``work[name + "out"]`` when ``work`` is given).
+
+    The factors are built components-first (numpy is slow on a trailing axis of 3); one transposing copy of each
+    and one batched ``matmul`` of ``(3q × K)(K × 3q)`` matrices make the blocks.
+    """
+    K, q, _, m = X.shape
+    A = _scratch(work, name + "A", (m, 3 * q, K))
+    B = _scratch(work, name + "B", (m, K, 3 * q))
+    np.copyto(A, X.reshape(K, 3 * q, m).transpose(2, 1, 0))
+    np.copyto(B, Y.reshape(K, 3 * q, m).transpose(2, 0, 1))
+    out = np.matmul(A, B, out=_scratch(work, name + "out", (m, 3 * q, 3 * q)))
+    return out.reshape(m, q, 3, q, 3).transpose(0, 1, 3, 2, 4)
+
+
+def _hinge_curvature_factors(
+    x1: np.ndarray,
+    x2: np.ndarray,
+    x3: np.ndarray,
+    x4: np.ndarray,
+    ok: np.ndarray,
+    spare: int = 0,
+    work: dict[str, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``∇²θ`` of every hinge as a sum of eight outer products: from node positions ``(3, m)`` (components first)
+    of wing 1, wing 2, edge node 1, edge node 2, ``X``, ``Y`` ``(spare + 8, 4, 3, m)`` with
+    ``∇²θ = Σ_k X[k] Y[k]ᵀ`` (see :func:`_outer_sum`); the first ``spare`` terms are zeros for the caller's own.
+
+    The closed form of the Jacobian of :func:`hinge_angle_gradient` (same n/h and foot-fraction formula, same signs),
+    from differentiating ``g_w = n_w/h_w`` and the foot fractions ``t_w`` directly (equivalent to the dihedral-angle
+    Hessian of Tamstorf & Grinspun 2013, "Discrete bending forces and their Jacobians", written per wing). Per wing
+    ``w`` (unit normal ``n``, moment arm ``h``, ``m`` the unit vector in the face from the crease line to the wing,
+    ``ê`` along the crease, length ``L``): the unit normal of a triangle moves by ``δn = −Σ_b ∇λ_b (n·δx_b)``
+    (``λ_b`` its barycentric coordinates, so ``∇λ_wing = m/h``, ``∇λ_v1 = −ê/L − (1 − t) m/h``,
+    ``∇λ_v2 = ê/L − t m/h``), ``∂h = m·(δx_wing − (1 − t) δx_v1 − t δx_v2)`` and ``∂t/∂x_v2 = (h m/L − t ê)/L``,
+    ``∂t/∂x_wing = ê/L``, ``∂t/∂x_v1 = −∂t/∂x_wing − ∂t/∂x_v2``.
+    With the node coefficients of the wing in ``∇θ = Σ_w c⊗n/h``, ``c = (1 at the wing, 0 at the other wing,
+    −(1 − t), −t)``, and ``d = (0, 0, −1, 1)`` this gives ::
+
+        ∇²θ = −Σ_w [ (c⊗m)(c⊗n)ᵀ/h² + (c⊗n)(c⊗m)ᵀ/h² + (c⊗ê)(d⊗n)ᵀ/(L h) + (d⊗n)(c⊗ê)ᵀ/(L h) + (d⊗n)(d⊗m)ᵀ/L² ]
+
+    (the last term is not symmetric per wing; its antisymmetric parts cancel between the two wings, since
+    ``n1 = ê × m1`` and ``n2 = m2 × ê``). Hinges not ``ok`` (edge or a moment arm below ``HINGE_EPS``) get finite
+    values from unit placeholders; callers weight them by zero.
+    """
+    m = x1.shape[1]
+    e = x4 - x3
+    Ls = np.where(ok, np.sqrt(_dot3(e, e)), 1.0)
+    chat = e / Ls
+    e_L = chat / Ls
+    X = _scratch(work, "hinge X", (spare + 8, 4, 3, m), zero=True)
+    Y = _scratch(work, "hinge Y", (spare + 8, 4, 3, m), zero=True)
+    for w, xw in enumerate((x1, x2)):
+        r = xw - x3
+        p = _dot3(chat, r)
+        perp = r - p * chat
+        hs = np.where(ok, np.sqrt(_dot3(perp, perp)), 1.0)
+        unit_m = perp / hs
+        n = _cross3(chat, unit_m) if w == 0 else _cross3(unit_m, chat)
+        t = p / Ls
+        n_h = n / hs
+        c = np.zeros((4, 1, m))
+        c[w] = 1.0
+        c[2, 0], c[3, 0] = t - 1.0, -t
+        k = spare + 4 * w
+        # the overall minus sign rides on the c⊗m factor and on the d⊗n factors (−d⊗n = (0, 0, n, −n))
+        X[k] = c * (-unit_m / hs)
+        Y[k] = c * n_h
+        X[k + 1], Y[k + 1] = Y[k], X[k]
+        X[k + 2] = c * e_L
+        Y[k + 2, 2], Y[k + 2, 3] = n_h, -n_h
+        X[k + 3, 2], X[k + 3, 3] = n_h, -n_h
+        tail = unit_m * (hs / (Ls * Ls))
+        Y[k + 3] = X[k + 2]
+        Y[k + 3, 2] -= tail
+        Y[k + 3, 3] += tail
+    return X, Y
+
+
+def hinge_angle_hessian(
+    x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.ndarray, weight: np.ndarray | None = None
+) -> np.ndarray:
+    """``weight · ∇²θ`` ``(m, 4, 4, 3, 3)``, rows ``[node a, node b, i, j]`` (nodes wing 1, wing 2, edge node 1,
+    edge node 2, positions ``(m, 3)``), in closed form (:func:`_hinge_curvature_factors`); the Jacobian of
+    :func:`hinge_angle_gradient`. Degenerate hinges (edge or a moment arm below ``HINGE_EPS``) get zeros, as
+    :func:`evaluate` skips them.
+    """
+    x1, x2, x3, x4 = (np.ascontiguousarray(v.T) for v in (x1, x2, x3, x4))
+    r1, r2, e = x1 - x3, x2 - x3, x4 - x3
+    L2 = _dot3(e, e)
+    L2s = np.where(L2 > 0, L2, 1.0)
+    h1sq = _dot3(r1, r1) - _dot3(r1, e) ** 2 / L2s
+    h2sq = _dot3(r2, r2) - _dot3(r2, e) ** 2 / L2s
+    ok = (L2 >= HINGE_EPS**2) & (np.abs(h1sq) >= HINGE_EPS**2) & (np.abs(h2sq) >= HINGE_EPS**2)
+    X, Y = _hinge_curvature_factors(x1, x2, x3, x4, ok)
+    X *= ok if weight is None else np.where(ok, weight, 0.0)
+    return _outer_sum(X, Y)
+
+
 def corner_angle_gradient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     """``∂α_corner/∂x_node`` ``(m, 3, 3, 3)`` of the three corner angles of triangles ``(a, b, c)`` (reference §3.5),
-    with analytic operations only (for complex-step differentiation)."""
+    with analytic operations only (for complex-step differentiation: the tests' reference for the face blocks)."""
     e_ab, l_ab = _csqrt_unit(b - a)
     e_ac, l_ac = _csqrt_unit(c - a)
     e_bc, l_bc = _csqrt_unit(c - b)
@@ -400,66 +525,90 @@ def _complex_step_jacobian(function, points: np.ndarray) -> np.ndarray:
     return np.moveaxis(out, 0, -1).reshape(m, *out.shape[2:], q, 3)
 
 
-def _corner_curvature(x: np.ndarray, tri: np.ndarray, weight: np.ndarray) -> np.ndarray:
-    """``Σ_corners weight · ∇²α`` as node blocks ``(t, 3, 3, 3, 3)`` of triangles ``tri``, in closed form.
+def _face_hessian_factors(
+    pts: tuple[np.ndarray, np.ndarray, np.ndarray],
+    grad: np.ndarray,
+    dphi: np.ndarray,
+    ddphi: np.ndarray,
+    work: dict[str, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``Σ_corners φ''(α) ∇α∇αᵀ + φ'(α) ∇²α`` of triangles with corners ``pts`` (three ``(3, t)``, components
+    first) as a sum of ten outer products per corner: ``X``, ``Y`` ``(30, 3, 3, t)`` (see :func:`_outer_sum`).
 
-    For the corner at P between ``u = Q − P`` and ``v = R − P``: ``α = arccos c``, ``c = û·v̂``,
+    ``grad`` ``(27, t)`` is ``∂α_corner/∂x_node`` (``Evaluation.face_grad`` flattened and transposed), ``dphi``,
+    ``ddphi`` ``(3, t)`` the energy's slopes ``φ'``, ``φ''`` per corner (zero on skipped triangles). For the
+    corner at P between ``u = Q − P`` and ``v = R − P``: ``α = arccos c``, ``c = û·v̂``, ``s = sin α``,
     ``∂c/∂u = q_u = (v̂ − c û)/|u|``, ``∂²c/∂u² = −(û q_uᵀ + q_u ûᵀ + c (I − ûûᵀ)/|u|)/|u|``,
-    ``∂²c/∂u∂v = ((I − v̂v̂ᵀ)/|v| − û q_vᵀ)/|u|``, and ``∇²α = −∇²c/sin α − (cos α/sin³α) ∇c∇cᵀ``; node P takes
-    ``−(∂u + ∂v)``. (The cap keeps ``weight`` → 0 where ``sin α`` → 0.)
+    ``∂²c/∂u∂v = ((I − v̂v̂ᵀ)/|v| − û q_vᵀ)/|u|``, ``∇α = −∇c/s``, ``∇²α = −∇²c/s − (c/s) ∇α∇αᵀ``; node P takes
+    ``−(∂u + ∂v)``. With ``U(z)``, ``V(z)`` the 9-vectors ``z`` at Q (resp. R) and ``−z`` at P, ``∇c = U(q_u) +
+    V(q_v)`` and the projectors written in the triangle's frame, ``I − ûûᵀ = nnᵀ + (n × û)(n × û)ᵀ`` (likewise
+    for v̂), every term is an outer product of two such 9-vectors. (The cap keeps ``φ'`` → 0 where ``s`` → 0.)
     """
-    eye = np.eye(3)
-    out = np.zeros((len(tri), 3, 3, 3, 3))
+    t = pts[0].shape[1]
+    X = _scratch(work, "face X", (30, 3, 3, t), zero=True)
+    Y = _scratch(work, "face Y", (30, 3, 3, t), zero=True)
+    nrm = _cross3(pts[1] - pts[0], pts[2] - pts[0])
+    nrm /= np.maximum(np.sqrt(_dot3(nrm, nrm)), 1e-300)
     for corner, (pn, qn, rn) in enumerate(((0, 1, 2), (1, 2, 0), (2, 0, 1))):
-        u = x[tri[:, qn]] - x[tri[:, pn]]
-        v = x[tri[:, rn]] - x[tri[:, pn]]
-        uh, lu = _unit(u)
-        vh, lv = _unit(v)
-        c = _rows_dot(uh, vh)
+        w1 = dphi[corner]
+        live = w1 != 0
+        u = pts[qn] - pts[pn]
+        v = pts[rn] - pts[pn]
+        a = 1.0 / np.where(live, np.sqrt(_dot3(u, u)), 1.0)
+        b = 1.0 / np.where(live, np.sqrt(_dot3(v, v)), 1.0)
+        uh, vh = u * a, v * b
+        c = _dot3(uh, vh)
         s = np.sqrt(np.maximum(1.0 - c * c, 1e-24))
-        qu = (vh - c[:, None] * uh) / lu[:, None]
-        qv = (uh - c[:, None] * vh) / lv[:, None]
-        uu = uh[:, :, None] * uh[:, None, :]
-        vv = vh[:, :, None] * vh[:, None, :]
-        cuu = -(
-            uh[:, :, None] * qu[:, None, :] + qu[:, :, None] * uh[:, None, :] + (c / lu)[:, None, None] * (eye - uu)
-        )
-        cuu /= lu[:, None, None]
-        cvv = -(
-            vh[:, :, None] * qv[:, None, :] + qv[:, :, None] * vh[:, None, :] + (c / lv)[:, None, None] * (eye - vv)
-        )
-        cvv /= lv[:, None, None]
-        cuv = ((eye - vv) / lv[:, None, None] - uh[:, :, None] * qv[:, None, :]) / lu[:, None, None]
-        w = weight[:, corner]
-        f1 = (-w / s)[:, None, None]
-        f2 = (-w * c / s**3)[:, None, None]
-        duu = f1 * cuu + f2 * qu[:, :, None] * qu[:, None, :]
-        dvv = f1 * cvv + f2 * qv[:, :, None] * qv[:, None, :]
-        duv = f1 * cuv + f2 * qu[:, :, None] * qv[:, None, :]
-        dvu = duv.transpose(0, 2, 1)
-        dpq, dpr = -(duu + dvu), -(duv + dvv)
-        out[:, qn, qn] += duu
-        out[:, rn, rn] += dvv
-        out[:, qn, rn] += duv
-        out[:, rn, qn] += dvu
-        out[:, pn, qn] += dpq
-        out[:, qn, pn] += dpq.transpose(0, 2, 1)
-        out[:, pn, rn] += dpr
-        out[:, rn, pn] += dpr.transpose(0, 2, 1)
-        out[:, pn, pn] += duu + duv + dvu + dvv
-    return out
+        qu = (vh - c * uh) * a
+        qv = (uh - c * vh) * b
+        f = -w1 / s  # ∇²α = f ∇²c − (c/s) ∇α∇αᵀ, so the curvature part of the corner is φ' ∇²α
+        k = 10 * corner
+        # φ'' ∇α∇αᵀ + φ' (−c/s) ∇α∇αᵀ
+        g = grad[9 * corner : 9 * corner + 9].reshape(3, 3, t)
+        X[k] = (ddphi[corner] - w1 * c / s) * g
+        Y[k] = g
+        # f ∇²c: −a [U(û) ∇cᵀ + ∇c U(û)ᵀ] − b [V(v̂) V(q_v)ᵀ + V(q_v) V(v̂)ᵀ] + the projector terms
+        fa, fb = f * a, f * b
+        X[k + 1, qn], X[k + 1, pn] = -fa * uh, fa * uh
+        Y[k + 1, qn], Y[k + 1, rn], Y[k + 1, pn] = qu, qv, -(qu + qv)
+        X[k + 2], Y[k + 2] = Y[k + 1], X[k + 1]
+        X[k + 3, rn], X[k + 3, pn] = -fb * vh, fb * vh
+        Y[k + 3, rn], Y[k + 3, pn] = qv, -qv
+        X[k + 4, rn], X[k + 4, pn] = -fb * qv, fb * qv
+        Y[k + 4, rn], Y[k + 4, pn] = vh, -vh
+        caa, cbb, ab = -c * a * a, -c * b * b, a * b
+        # out of plane: [U(n) V(n)] [[−c a², a b], [a b, −c b²]] [U(n) V(n)]ᵀ
+        fn = f * nrm
+        X[k + 5, qn], X[k + 5, pn] = fn, -fn
+        Y[k + 5, qn], Y[k + 5, rn], Y[k + 5, pn] = caa * nrm, ab * nrm, -(caa + ab) * nrm
+        X[k + 6, rn], X[k + 6, pn] = fn, -fn
+        Y[k + 6, qn], Y[k + 6, rn], Y[k + 6, pn] = ab * nrm, cbb * nrm, -(ab + cbb) * nrm
+        # in plane: −c a² U(w_u)U(w_u)ᵀ − c b² V(w_v)V(w_v)ᵀ + a b (U(w_v)V(w_v)ᵀ + V(w_v)U(w_v)ᵀ)
+        wu, wv = _cross3(nrm, uh), _cross3(nrm, vh)
+        fwu, fwv = f * wu, f * wv
+        X[k + 7, qn], X[k + 7, pn] = fwu, -fwu
+        Y[k + 7, qn], Y[k + 7, pn] = caa * wu, -caa * wu
+        X[k + 8, rn], X[k + 8, pn] = fwv, -fwv
+        Y[k + 8, qn], Y[k + 8, rn], Y[k + 8, pn] = ab * wv, cbb * wv, -(ab + cbb) * wv
+        X[k + 9, qn], X[k + 9, pn] = fwv, -fwv
+        Y[k + 9, rn], Y[k + 9, pn] = ab * wv, -ab * wv
+    return X, Y
 
 
 def exact_hessian_blocks(
-    model: BarHingeModel, x: np.ndarray, ev: Evaluation
+    model: BarHingeModel, x: np.ndarray, ev: Evaluation, work: dict[str, np.ndarray] | None = None
 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
     """Element blocks of the exact Hessian ``∇²E`` at ``x`` (``ev`` evaluated there with ``jacobians=True``).
 
     Returns ``(bars (b, 3, 3), hinges (h, 4, 4, 3, 3), faces (t, 3, 3, 3, 3))``, rows ``[node a, node b, i, j]``:
     bars ``k (d̂d̂ᵀ + (1 − L0/ℓ)(I − d̂d̂ᵀ))`` (the geometric term also where it is negative), hinges
-    ``k ∇θ∇θᵀ + k (θ − θ̄) ∇²θ``, faces ``Σ_corners φ''(α) ∇α∇αᵀ + φ'(α) ∇²α``. ``∇²θ`` is the complex-step
-    Jacobian of :func:`hinge_angle_gradient`, ``∇²α`` is in closed form (:func:`_corner_curvature`). The Gauss–Newton
-    matrix is these without the curvature terms (``θ − θ̄``, ``φ'``) and with the negative bar term dropped.
+    ``k ∇θ∇θᵀ + k (θ − θ̄) ∇²θ``, faces ``Σ_corners φ''(α) ∇α∇αᵀ + φ'(α) ∇²α``, all in closed form
+    (:func:`_hinge_curvature_factors`, :func:`_face_hessian_factors`), each element's block one batched product of
+    its outer-product factors (:func:`_outer_sum`). The Gauss–Newton matrix is these without the curvature terms
+    (``θ − θ̄``, ``φ'``) and with the negative bar term dropped. The hinge and face blocks are transposed views of
+    ``(·, q, 3, q, 3)`` storage (``HessianAssembler.assemble_exact`` scatters them without a copy). ``work`` (a
+    dict the caller keeps) holds the large scratch arrays between calls; the returned blocks then live in it and
+    are valid until the next call with it.
     """
     i, j = model.bar_nodes[:, 0], model.bar_nodes[:, 1]
     dhat, ell = _unit(x[j] - x[i])
@@ -467,20 +616,28 @@ def exact_hessian_blocks(
     geo = 1.0 - model.bar_length / np.where(ell > 0, ell, 1.0)
     bars = model.bar_k[:, None, None] * (outer + geo[:, None, None] * (np.eye(3) - outer))
     hinges = faces = None
+    xt = np.ascontiguousarray(x.T)  # components first for the element factors
     if ev.hinge_grad is not None and len(model.hinge_k):
-        g, k = ev.hinge_grad, ev.hinge_k
-        hinges = k[:, None, None, None, None] * g[:, :, None, :, None] * g[:, None, :, None, :]
-        active = np.flatnonzero((k != 0) & (ev.hinge_dev != 0))
-        if len(active):
-            nodes = np.column_stack([model.hinge_wings, model.hinge_edge_nodes])[active]
-            d2 = _complex_step_jacobian(hinge_angle_gradient, x[nodes])  # (m, 4, 3, 4, 3): [a, i, b, j]
-            hinges[active] += (k[active] * ev.hinge_dev[active])[:, None, None, None, None] * d2.transpose(
-                0, 1, 3, 2, 4
-            )
+        m, k = len(model.hinge_k), ev.hinge_k
+        wings, edge = model.hinge_wings, model.hinge_edge_nodes
+        # k ∇θ∇θᵀ + k (θ − θ̄) ∇²θ in one batched product: the Gauss–Newton term first, then the eight terms of
+        # ∇²θ (weight zero where k = 0: skipped hinges)
+        X, Y = _hinge_curvature_factors(
+            xt[:, wings[:, 0]], xt[:, wings[:, 1]], xt[:, edge[:, 0]], xt[:, edge[:, 1]], k != 0, 1, work
+        )
+        X[1:] *= k * ev.hinge_dev
+        g = ev.hinge_grad.reshape(m, 12).T.reshape(4, 3, m)
+        X[0] = k * g
+        Y[0] = g
+        hinges = _outer_sum(X, Y, work, "hinge ")
     if ev.face_grad is not None:
-        fg = ev.face_grad
-        faces = np.einsum("tc,tcai,tcbj->tabij", ev.face_ddphi, fg, fg)
-        active = np.flatnonzero(np.any(ev.face_dphi != 0, axis=1))
-        if len(active):
-            faces[active] += _corner_curvature(x, model.triangles[active], ev.face_dphi[active])
+        tri, t = model.triangles, len(model.triangles)
+        X, Y = _face_hessian_factors(
+            tuple(xt[:, tri[:, q]] for q in range(3)),
+            ev.face_grad.reshape(t, 27).T,
+            ev.face_dphi.T,
+            ev.face_ddphi.T,
+            work,
+        )
+        faces = _outer_sum(X, Y, work, "face ")
     return bars, hinges, faces

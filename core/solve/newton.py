@@ -124,18 +124,38 @@ class HessianAssembler:
         return self.matrix.assemble(np.concatenate(idx), np.concatenate(vals))
 
     def assemble_exact(self, x: np.ndarray, ev: Evaluation) -> np.ndarray:
-        """Exact Hessian storage (``forces.exact_hessian_blocks``) at ``x``; ``ev`` made with ``jacobians=True``."""
-        bars, hinges, faces = exact_hessian_blocks(self.model, x, ev)
-        idx = [self.bar_index.reshape(-1)]
-        vals = [np.concatenate([bars, bars, -bars, -bars]).reshape(-1)]
-        if hinges is not None:
-            idx.append(self.hinge_index.reshape(-1))
-            vals.append(hinges.reshape(-1))
-        if faces is not None:
-            idx.append(self.face_index.reshape(-1))
-            vals.append(faces.reshape(-1))
+        """Exact Hessian storage (``forces.exact_hessian_blocks``) at ``x``; ``ev`` made with ``jacobians=True``.
+
+        The element blocks are scattered in the order they are computed in (hinges and faces ``[e, a, i, b, j]``,
+        no transposing copy). The scatter index (bars, hinges, faces concatenated) and the scratch arrays are made
+        on the first call and kept; the hinge and face blocks are computed straight into the kept value vector.
+        """
+        work = getattr(self, "_exact_work", None)
+        nb, nh, nf = len(self.model.bar_k), len(self.model.hinge_k), len(self.model.triangles)
+        if work is None:
+            index = [self.bar_index.reshape(-1), self.hinge_index.transpose(0, 1, 3, 2, 4).reshape(-1)]
+            index.append(self.face_index.transpose(0, 1, 3, 2, 4).reshape(-1))
+            values = np.zeros(sum(len(i) for i in index))
+            hinge_out = values[36 * nb : 36 * nb + 144 * nh]
+            work = self._exact_work = {
+                "index": np.concatenate(index),
+                "values": values,
+                "hinge out": hinge_out.reshape(nh, 12, 12),
+                "face out": values[36 * nb + 144 * nh :].reshape(nf, 9, 9),
+            }
+        values = work["values"]
+        bars, hinges, faces = exact_hessian_blocks(self.model, x, ev, work)
+        per_bar = values[: 36 * nb].reshape(4, nb, 3, 3)
+        per_bar[0], per_bar[1] = bars, bars
+        np.negative(bars, out=per_bar[2])
+        per_bar[3] = per_bar[2]
+        for blocks, part in ((hinges, work["hinge out"]), (faces, work["face out"])):
+            if blocks is None:
+                part.fill(0.0)
+            elif not np.may_share_memory(blocks, part):  # not computed in place (e.g. shapes changed)
+                part[...] = blocks.transpose(0, 1, 3, 2, 4).reshape(part.shape)
         self.assemblies += 1
-        return self.matrix.assemble(np.concatenate(idx), np.concatenate(vals))
+        return self.matrix.assemble(work["index"], values)
 
 
 @dataclass

@@ -1,0 +1,183 @@
+"""The closed-form hinge curvature ∇²θ (``forces.hinge_angle_hessian``) is the Jacobian of the hinge gradient: it
+equals the complex-step Jacobian of ``forces.hinge_angle_gradient`` (exact to round-off) on random hinges and on
+nearly flat and nearly closed ones, valley and mountain side; degenerate hinges give zeros, not inf/nan. The face
+blocks (closed-form ∇²α) equal the complex-step Jacobian of ``forces.corner_angle_gradient`` likewise."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curved_fold.core.solve import forces as F  # noqa: N812
+from curved_fold.core.solve.model import build_model
+from curved_fold.core.solve.newton import HessianAssembler
+from tests.test_forces import grid_mesh
+
+
+def complex_step_hessian(points: np.ndarray) -> np.ndarray:
+    """Reference ∇²θ ``(m, 4, 4, 3, 3)`` rows ``[a, b, i, j]``: complex-step Jacobian of the analytic gradient."""
+    return F._complex_step_jacobian(F.hinge_angle_gradient, points).transpose(0, 1, 3, 2, 4)
+
+
+def closed_form(points: np.ndarray, weight: np.ndarray | None = None) -> np.ndarray:
+    return F.hinge_angle_hessian(points[:, 0], points[:, 1], points[:, 2], points[:, 3], weight)
+
+
+def relative_error(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per hinge: max |a − b| over max |b|."""
+    axes = tuple(range(1, a.ndim))
+    return np.max(np.abs(a - b), axis=axes) / np.max(np.abs(b), axis=axes)
+
+
+def hinges_at(theta: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Hinges ``(m, 4, 3)`` (wing 1, wing 2, edge node 1, edge node 2) with fold angle ``theta`` (rad, valley > 0),
+    random edge length, moment arms, foot fractions (also outside [0, 1]), then rotated and moved at random."""
+    m = len(theta)
+    L = rng.uniform(0.3, 2.0, m)
+    h1, h2 = rng.uniform(0.1, 1.5, m), rng.uniform(0.1, 1.5, m)
+    t1, t2 = rng.uniform(-0.4, 1.4, m), rng.uniform(-0.4, 1.4, m)
+    out = np.zeros((m, 4, 3))
+    out[:, 3, 0] = L  # edge along x; face 1 (v1, v2, w1) counter-clockwise seen from +z: normal +z
+    out[:, 0, 0], out[:, 0, 1] = t1 * L, h1
+    # wing 2 on the other side (−y when flat), turned about the edge: raising both wings toward +z is a valley
+    phi = np.pi - theta
+    out[:, 1, 0] = t2 * L
+    out[:, 1, 1] = h2 * np.cos(phi)
+    out[:, 1, 2] = h2 * np.sin(phi)
+    q, _ = np.linalg.qr(rng.normal(size=(m, 3, 3)))
+    return np.einsum("mij,mnj->mni", q, out) + rng.normal(size=(m, 1, 3))
+
+
+def test_setup_has_the_intended_fold_angle_and_sign():
+    theta = np.array([0.5, -0.5, 3.0, -3.0, 1e-7, -1e-7])
+    np.testing.assert_allclose(fold_angle(hinges_at(theta, np.random.default_rng(0))), theta, atol=1e-9)
+
+
+def test_closed_form_equals_complex_step_on_random_hinges():
+    rng = np.random.default_rng(1)
+    p = rng.normal(size=(400, 4, 3))
+    ref = complex_step_hessian(p)
+    H = closed_form(p)
+    assert np.max(relative_error(H, ref)) < 1e-10
+    assert np.max(np.abs(ref)) > 1.0  # a real comparison, not of zeros
+
+
+@pytest.mark.parametrize(
+    "theta",
+    [
+        pytest.param(np.array([1e-9, -1e-9, 1e-5, -1e-5, 0.0]), id="nearly-flat"),
+        pytest.param(np.array([np.pi - 1e-9, -(np.pi - 1e-9), np.pi - 1e-5, -(np.pi - 1e-5), 3.1]), id="nearly-closed"),
+        pytest.param(np.linspace(-3.1, 3.1, 63), id="valley-and-mountain"),
+    ],
+)
+def test_closed_form_equals_complex_step_flat_and_closed(theta):
+    rng = np.random.default_rng(2)
+    p = hinges_at(np.repeat(theta, 8), rng)
+    ref = complex_step_hessian(p)
+    H = closed_form(p)
+    assert np.max(relative_error(H, ref)) < 1e-10
+
+
+def fold_angle(p: np.ndarray) -> np.ndarray:
+    """θ of hinges ``(m, 4, 3)`` by the formula of ``evaluate`` (atan2, valley > 0)."""
+    x1, x2, x3, x4 = (p[:, q] for q in range(4))
+    n1 = F._unit(F._cross(x4 - x3, x1 - x3))[0]
+    n2 = F._unit(F._cross(x3 - x4, x2 - x4))[0]
+    chat = F._unit(x4 - x3)[0]
+    return np.arctan2(F._rows_dot(F._cross(n1, chat), n2), np.clip(F._rows_dot(n1, n2), -1, 1))
+
+
+def test_curvature_is_the_second_derivative_of_the_angle_on_both_sides():
+    """vᵀ∇²θv equals d²θ/ds² along x + s v (central differences of θ itself), for valleys and mountains alike:
+    the sign convention of ∇²θ is that of θ, independently of the gradient formula."""
+    rng = np.random.default_rng(6)
+    theta = np.repeat([0.5, -0.5, 2.0, -2.0, 3.0, -3.0], 10)
+    p = hinges_at(theta, rng)
+    v = rng.normal(size=p.shape)
+    s = 1e-4
+    fd = (fold_angle(p + s * v) - 2.0 * fold_angle(p) + fold_angle(p - s * v)) / (s * s)
+    quad = np.einsum("mai,mabij,mbj->m", v, closed_form(p), v)
+    np.testing.assert_allclose(fold_angle(p), theta, atol=1e-9)
+    assert np.max(np.abs(quad - fd)) < 1e-5 * np.max(np.abs(quad))
+    assert np.min(np.abs(quad)) > 1e-3  # real curvature, not zeros
+    # mirroring a hinge flips θ and its curvature; the closed form follows
+    mirror = np.diag([1.0, 1.0, -1.0])
+    pm = p @ mirror
+    np.testing.assert_allclose(fold_angle(pm), -fold_angle(p), atol=1e-12)
+    Hm = np.einsum("ik,mabkl,lj->mabij", mirror, closed_form(pm), mirror)
+    assert np.max(np.abs(Hm + closed_form(p))) < 1e-10 * np.max(np.abs(closed_form(p)))
+
+
+def test_weight_and_symmetry():
+    rng = np.random.default_rng(3)
+    p = rng.normal(size=(50, 4, 3))
+    w = rng.normal(size=50)
+    H = closed_form(p, w)
+    np.testing.assert_allclose(H, w[:, None, None, None, None] * closed_form(p), rtol=0, atol=1e-12 * np.max(np.abs(H)))
+    # ∇²θ is symmetric ([a, b, i, j] = [b, a, j, i]) and translation-invariant (rows sum to zero over the nodes)
+    sym = H.transpose(0, 2, 1, 4, 3)
+    assert np.max(np.abs(H - sym)) < 1e-10 * np.max(np.abs(H))
+    assert np.max(np.abs(H.sum(axis=2))) < 1e-10 * np.max(np.abs(H))
+
+
+def test_degenerate_hinges_are_zero_not_nan():
+    rng = np.random.default_rng(4)
+    p = rng.normal(size=(4, 4, 3))
+    p[0, 3] = p[0, 2]  # edge of zero length
+    p[1, 0] = p[1, 2] + 0.3 * (p[1, 3] - p[1, 2])  # wing 1 on the crease line: moment arm 0
+    p[2, 1] = p[2, 3]  # wing 2 on an edge node
+    H = closed_form(p, np.ones(4))
+    assert np.all(np.isfinite(H))
+    assert np.all(H[:3] == 0.0)
+    assert np.max(relative_error(H[3:], complex_step_hessian(p[3:]))) < 1e-10
+
+
+def test_exact_hessian_blocks_use_the_closed_form():
+    """The hinge blocks of ``exact_hessian_blocks`` are k∇θ∇θᵀ + k(θ − θ̄)∇²θ with the complex-step ∇²θ."""
+    mesh = grid_mesh(3, 3, creases={(1, 5): ("V", 90.0), (5, 9): ("M", -60.0), (2, 6): ("U", np.nan)})
+    model = build_model(mesh)
+    x = model.rest + np.random.default_rng(5).normal(0, 0.08, model.rest.shape)
+    theta = F.fold_angles(model, x)
+    ev = F.evaluate(model, x, theta, 0.7, jacobians=True)
+    _, hinges, _ = F.exact_hessian_blocks(model, x, ev)
+    g, k = ev.hinge_grad, ev.hinge_k
+    nodes = np.column_stack([model.hinge_wings, model.hinge_edge_nodes])
+    ref = k[:, None, None, None, None] * g[:, :, None, :, None] * g[:, None, :, None, :]
+    ref += (k * ev.hinge_dev)[:, None, None, None, None] * complex_step_hessian(x[nodes])
+    assert np.max(np.abs(hinges - ref)) < 1e-12 * np.max(np.abs(ref))
+    # and the assembler scatters the same matrix as the plain [a, b, i, j] blocks would
+    assembler = HessianAssembler(model)
+    bars, _, faces = F.exact_hessian_blocks(model, x, ev)
+    plain = assembler.matrix.assemble(
+        np.concatenate(
+            [assembler.bar_index.reshape(-1), assembler.hinge_index.reshape(-1), assembler.face_index.reshape(-1)]
+        ),
+        np.concatenate(
+            [
+                np.concatenate([bars, bars, -bars, -bars]).reshape(-1),
+                np.ascontiguousarray(ref).reshape(-1),
+                faces.reshape(-1),
+            ]
+        ),
+    )
+    H = assembler.assemble_exact(x, ev)
+    assert np.max(np.abs(H[:-1] - plain[:-1])) < 1e-12 * np.max(np.abs(plain))
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_face_blocks_equal_the_complex_step_curvature(seed):
+    """The face blocks Σ φ''∇α∇αᵀ + φ'∇²α (closed form, ten outer products per corner) equal the same sum with ∇²α
+    the complex-step Jacobian of ``corner_angle_gradient``; also with squashed and stretched corners."""
+    mesh = grid_mesh(3, 3, creases={(1, 5): ("V", 90.0), (5, 9): ("M", -60.0)})
+    model = build_model(mesh, face_stiffness=0.3)
+    rng = np.random.default_rng(seed)
+    x = model.rest + rng.normal(0, 0.08, model.rest.shape)
+    x[5] = 0.5 * (x[4] + x[6]) + 1e-4 * rng.normal(size=3)  # two corners near 180°, one near 0°
+    ev = F.evaluate(model, x, F.fold_angles(model, x), 0.7, jacobians=True)
+    _, _, faces = F.exact_hessian_blocks(model, x, ev)
+    tri = model.triangles
+    d2 = F._complex_step_jacobian(F.corner_angle_gradient, x[tri])  # (t, corner, a, i, b, j)
+    ref = np.einsum("tc,tcai,tcbj->tabij", ev.face_ddphi, ev.face_grad, ev.face_grad)
+    ref += np.einsum("tc,tcaibj->tabij", ev.face_dphi, d2)
+    assert np.max(np.abs(ref)) > 1.0
+    assert np.max(np.abs(faces - ref)) < 1e-10 * np.max(np.abs(ref))

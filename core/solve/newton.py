@@ -39,7 +39,7 @@ from .model import BarHingeModel
 MAX_STEP = 0.25
 """Largest nodal displacement of one Newton step, in normalised units (the model fits in a unit sphere)."""
 
-PCG_MAX = 12
+PCG_MAX = 8
 """CG iterations allowed with a stale preconditioner before the factorisation is rebuilt."""
 
 PCG_RTOL = 1e-2
@@ -106,33 +106,12 @@ class HessianAssembler:
         self.factor: BlockFactor | None = None
         self.last_cg_iterations = 0
 
-    def assemble(self, ev: Evaluation) -> np.ndarray:
-        """Gauss–Newton Hessian storage from an evaluation made with ``jacobians=True``."""
-        K = ev.bar_blocks
-        idx = [self.bar_index.reshape(-1)]
-        vals = [np.concatenate([K, K, -K, -K]).reshape(-1)]
-        if ev.hinge_grad is not None:
-            g = ev.hinge_grad
-            hv = ev.hinge_k[:, None, None, None, None] * g[:, :, None, :, None] * g[:, None, :, None, :]
-            idx.append(self.hinge_index.reshape(-1))
-            vals.append(hv.reshape(-1))
-        if ev.face_grad is not None:
-            fv = self.model.face_k * np.einsum("tcai,tcbj->tabij", ev.face_grad, ev.face_grad)
-            idx.append(self.face_index.reshape(-1))
-            vals.append(fv.reshape(-1))
-        self.assemblies += 1
-        return self.matrix.assemble(np.concatenate(idx), np.concatenate(vals))
-
-    def assemble_exact(self, x: np.ndarray, ev: Evaluation) -> np.ndarray:
-        """Exact Hessian storage (``forces.exact_hessian_blocks``) at ``x``; ``ev`` made with ``jacobians=True``.
-
-        The element blocks are scattered in the order they are computed in (hinges and faces ``[e, a, i, b, j]``,
-        no transposing copy). The scatter index (bars, hinges, faces concatenated) and the scratch arrays are made
-        on the first call and kept; the hinge and face blocks are computed straight into the kept value vector.
-        """
+    def _work(self) -> dict[str, np.ndarray]:
+        """The scatter index (bars, hinges, faces concatenated; hinge and face blocks ``[e, a, i, b, j]``) and the
+        value vector with its hinge and face parts as ``(e, 12, 12)`` / ``(e, 9, 9)`` views, made once and kept."""
         work = getattr(self, "_exact_work", None)
-        nb, nh, nf = len(self.model.bar_k), len(self.model.hinge_k), len(self.model.triangles)
         if work is None:
+            nb, nh, nf = len(self.model.bar_k), len(self.model.hinge_k), len(self.model.triangles)
             index = [self.bar_index.reshape(-1), self.hinge_index.transpose(0, 1, 3, 2, 4).reshape(-1)]
             index.append(self.face_index.transpose(0, 1, 3, 2, 4).reshape(-1))
             values = np.zeros(sum(len(i) for i in index))
@@ -143,12 +122,48 @@ class HessianAssembler:
                 "hinge out": hinge_out.reshape(nh, 12, 12),
                 "face out": values[36 * nb + 144 * nh :].reshape(nf, 9, 9),
             }
-        values = work["values"]
-        bars, hinges, faces = exact_hessian_blocks(self.model, x, ev, work)
+        return work
+
+    def _bars_into(self, values: np.ndarray, bars: np.ndarray) -> None:
+        """Bar blocks ``K`` as the four node blocks ``K, K, −K, −K`` (ii, jj, ij, ji) at the head of ``values``."""
+        nb = len(bars)
         per_bar = values[: 36 * nb].reshape(4, nb, 3, 3)
         per_bar[0], per_bar[1] = bars, bars
         np.negative(bars, out=per_bar[2])
         per_bar[3] = per_bar[2]
+
+    def assemble(self, ev: Evaluation) -> np.ndarray:
+        """Gauss–Newton Hessian storage from an evaluation made with ``jacobians=True``: bar blocks, ``k ∇θ∇θᵀ``
+        per hinge and ``k_f Σ ∇α∇αᵀ`` per face, each a batched outer product written into the kept value vector
+        (:meth:`_work`)."""
+        work = self._work()
+        values = work["values"]
+        self._bars_into(values, ev.bar_blocks)
+        if ev.hinge_grad is not None and len(ev.hinge_k):
+            g = ev.hinge_grad.reshape(len(ev.hinge_k), 12)
+            np.multiply(g[:, :, None], (ev.hinge_k[:, None] * g)[:, None, :], out=work["hinge out"])
+        else:
+            work["hinge out"].fill(0.0)
+        if ev.face_grad is not None:
+            fg = ev.face_grad.reshape(len(ev.face_grad), 3, 9)
+            np.matmul(fg.transpose(0, 2, 1), fg, out=work["face out"])
+            work["face out"] *= self.model.face_k
+        else:
+            work["face out"].fill(0.0)
+        self.assemblies += 1
+        return self.matrix.assemble(work["index"], values)
+
+    def assemble_exact(self, x: np.ndarray, ev: Evaluation) -> np.ndarray:
+        """Exact Hessian storage (``forces.exact_hessian_blocks``) at ``x``; ``ev`` made with ``jacobians=True``.
+
+        The element blocks are scattered in the order they are computed in (hinges and faces ``[e, a, i, b, j]``,
+        no transposing copy). The scatter index (bars, hinges, faces concatenated) and the scratch arrays are made
+        on the first call and kept; the hinge and face blocks are computed straight into the kept value vector.
+        """
+        work = self._work()
+        values = work["values"]
+        bars, hinges, faces = exact_hessian_blocks(self.model, x, ev, work)
+        self._bars_into(values, bars)
         for blocks, part in ((hinges, work["hinge out"]), (faces, work["face out"])):
             if blocks is None:
                 part.fill(0.0)

@@ -119,8 +119,10 @@ BIG = {"CircularPleat-antiFacet.svg", "Carved_Cylinder.svg", "Treble_Clef.svg", 
 
 
 KNOWN_APART = {("CircularPleat-antiFacet.svg", 0.6)}
-"""The static fold leaves the saddle this symmetric pleat passes at 20 % (E 0.600611, a minimum); the animation's
-frames skip the minimum check and stay on the symmetric branch (E 0.600623). Not solved yet (docs/solver.md)."""
+"""The static fold leaves the saddle this symmetric pleat passes at 20 % (E 0.600608, a minimum); the animation's
+frames skip the minimum check and stay on a saddle of the symmetric branch (E 0.600623). With the check on every
+frame the animation ends in another minimum (E 0.600619): several minima lie within 2e-5 in energy and the path
+decides. Not solved (docs/solver.md, "One natural state")."""
 
 
 def _cases():

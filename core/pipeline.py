@@ -109,7 +109,6 @@ def make_report(
         "force_evaluations": int(result.force_evaluations),
         "hessian_assemblies": int(result.hessian_assemblies),
         "linear_solves": int(result.linear_solves),
-        "hessian_products": int(result.hessian_products),
         "converged": bool(result.converged),
         "residual": float(result.residual),
         "energy": float(result.energy),

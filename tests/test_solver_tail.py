@@ -188,7 +188,8 @@ def test_static_fold_reports_the_state_and_where_another_branches_off():
 
 def test_gauss_newton_assembly_equals_its_matrix_free_product():
     """The assembled Gauss–Newton matrix (batched outer products scattered into block storage) times v equals the
-    element-by-element product ``forces.hessian_matvec`` that CG uses (two independent codings of one matrix)."""
+    element-by-element product ``forces.hessian_matvec`` (the faithful time-step bound's power iteration): two
+    independent codings of one matrix."""
     mesh = grid_mesh(4, 3, creases={(1, 6): ("V", 90.0), (6, 11): ("M", -60.0), (2, 7): ("U", np.nan)})
     model = build_model(mesh)
     rng = np.random.default_rng(3)

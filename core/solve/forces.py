@@ -272,9 +272,8 @@ def hessian_matvec(model: BarHingeModel, ev: Evaluation, v: np.ndarray) -> np.nd
     """Gauss–Newton Hessian (the PSD blocks of ``ev``, see ``core.solve.newton``) times ``v`` (``(n, 3)``).
 
     Element by element, without assembling a matrix: bars ``K_b (v_j − v_i)``, hinges ``k ∇θ (∇θ·v)``, faces
-    ``k_f Σ ∇α (∇α·v)``, summed into the nodes by one ``bincount`` over a precomputed index (this product is the
-    inner loop of preconditioned CG: one call per CG iteration). Used by the power iteration of the time-step bound
-    and by preconditioned CG.
+    ``k_f Σ ∇α (∇α·v)``, summed into the nodes by one ``bincount`` over a precomputed index. Used by the power
+    iteration of the faithful integrator's time-step bound (and by the tests, against the assembled matrix).
     """
     hn, flat, size = _matvec_index(model)
     i, j = model.bar_nodes[:, 0], model.bar_nodes[:, 1]

@@ -75,8 +75,8 @@ class FoldResult:
     (``nan`` on edges with fewer than two triangles); ``energy`` in normalised units; ``residual`` scale-free.
 
     ``force_evaluations`` counts every evaluation of the model (gradient or energy-only, line search included);
-    ``hessian_assemblies`` (assembly + block factorisation), ``linear_solves`` (applications of a factorisation) and
-    ``hessian_products`` (matrix-free CG products) are reported separately (0 for the faithful solver).
+    ``hessian_assemblies`` (assembly + block factorisation) and ``linear_solves`` (applications of a factorisation)
+    are reported separately (0 for the faithful solver).
     ``exact_iterations`` counts Newton steps with the exact Hessian, ``saddle_escapes`` negative-curvature steps out
     of a saddle (at fold percents ``saddle_percents``); ``continuation_steps`` is the number of fold-percent steps
     of a continuation from the flat sheet (0 for a single solve); ``negative_pivots`` is the number of negative
@@ -95,7 +95,6 @@ class FoldResult:
     method: str
     hessian_assemblies: int = 0
     linear_solves: int = 0
-    hessian_products: int = 0
     theta: np.ndarray = field(default_factory=lambda: np.zeros(0))
     velocities: np.ndarray | None = None
     dt: float | None = None
@@ -287,7 +286,7 @@ class Solver:
         x, theta = self._start(None, None, float(percent) / n)  # the flat sheet (pins placed, if any)
         previous: tuple[float, np.ndarray, np.ndarray] | None = None
         last_p = 0.0
-        totals = dict(iterations=0, evaluations=0, assemblies=0, solves=0, products=0, exact=0, saddles=0)
+        totals = dict(iterations=0, evaluations=0, assemblies=0, solves=0, exact=0, saddles=0)
         saddle_percents: list[float] = []
         done_iterations = 0
         for k in range(1, n + 1):
@@ -314,7 +313,6 @@ class Solver:
             totals["evaluations"] += r.force_evaluations
             totals["assemblies"] += r.hessian_assemblies
             totals["solves"] += r.linear_solves
-            totals["products"] += r.hessian_products
             totals["exact"] += r.exact_iterations
             totals["saddles"] += r.saddle_escapes
             if r.saddle_escapes:
@@ -325,7 +323,6 @@ class Solver:
         r.force_evaluations = totals["evaluations"]
         r.hessian_assemblies = totals["assemblies"] + 1
         r.linear_solves = totals["solves"]
-        r.hessian_products = totals["products"]
         r.exact_iterations = totals["exact"]
         r.saddle_escapes = totals["saddles"]
         r.saddle_percents = saddle_percents
@@ -426,7 +423,6 @@ class Solver:
             method=self.method,
             hessian_assemblies=st.hessian_assemblies,
             linear_solves=st.linear_solves,
-            hessian_products=st.hessian_products,
             theta=theta,
             exact_iterations=st.exact_iterations,
             saddle_escapes=st.saddle_escapes,

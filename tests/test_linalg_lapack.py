@@ -11,7 +11,7 @@ import pytest
 
 from curved_fold.core.solve import forces as F  # noqa: N812
 from curved_fold.core.solve import lapack
-from curved_fold.core.solve.linalg import INVERT_AFTER, BlockTridiagonal, _blas_control, single_threaded_blas
+from curved_fold.core.solve.linalg import BlockTridiagonal, _blas_control, single_threaded_blas
 from curved_fold.core.solve.model import build_model
 from curved_fold.core.solve.newton import HessianAssembler
 from curved_fold.core.solve.solver import Solver, SolverSettings, rigid_rms
@@ -119,11 +119,10 @@ def test_factor_and_apply_solve_a_random_spd_block_tridiagonal_matrix(backend, s
     assert factor.negative_pivots == 0 and factor.negative_direction() is None
     if backend == "lapack":
         assert all(c is not None for c in factor.chols)  # every pivot by Cholesky
-    for k in range(2 * INVERT_AFTER):  # before and after the triangular factors are inverted (lapack backend)
+    for _ in range(3):
         rhs = rng.normal(size=3 * bt.n_nodes)
         x = factor.apply(rhs)
         np.testing.assert_allclose(x, np.linalg.solve(M, rhs), rtol=0, atol=1e-11 * np.max(np.abs(x)))
-        assert (factor.triangular_inverses is not None) == (backend == "lapack" and k + 1 >= INVERT_AFTER)
     np.testing.assert_allclose(bt.solve(storage, rhs, shift), x, rtol=0, atol=1e-13 * np.max(np.abs(x)))
 
 

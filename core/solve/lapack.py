@@ -2,10 +2,9 @@
 
 numpy has no triangular solve and no Cholesky update, and Blender ships numpy without scipy; but every numpy wheel
 for Linux and Windows (and the Intel macOS ones) bundles OpenBLAS with LAPACK and CBLAS exported. The block
-factorisation of :mod:`.linalg` uses five of its routines — ``potrf`` (Cholesky), ``trsm`` and ``trsv``
-(triangular solves), ``syrk`` (``C − WᵀW``) and ``trtri`` (triangular inverse, so that repeated solves are numpy
-products) — which need about a third of the flops of the per-block inverse and products of the numpy code
-(≈ 2.3 s³ instead of ≈ 6.7 s³ per block of s unknowns).
+factorisation of :mod:`.linalg` uses four of its routines — ``potrf`` (Cholesky), ``trsm`` and ``trsv``
+(triangular solves) and ``syrk`` (``C − WᵀW``) — which need about a third of the flops of the per-block inverse and
+products of the numpy code (≈ 2.3 s³ instead of ≈ 6.7 s³ per block of s unknowns).
 
 Two naming schemes are found: numpy 1.x's ``numpy.libs/libopenblas64_*`` (symbols ``cblas_dtrsm64_``,
 ``dpotrf_64_``) and numpy 2.x's ``numpy.libs/libscipy_openblas64_*`` (``scipy_cblas_dtrsm64_``, …). The ``64_``
@@ -63,7 +62,6 @@ class OpenBLAS:
             "trsm": f"{prefix}cblas_dtrsm{suffix}",
             "syrk": f"{prefix}cblas_dsyrk{suffix}",
             "trsv": f"{prefix}cblas_dtrsv{suffix}",
-            "trtri": f"{prefix}dtrtri_{suffix}",
         }
         found = {key: getattr(lib, name, None) for key, name in names.items()}
         self.has_lapack = all(f is not None for f in found.values())
@@ -82,10 +80,6 @@ class OpenBLAS:
         self._trsv = found["trsv"]
         self._trsv.argtypes = [enum, enum, enum, enum, integer, ptr, integer, ptr, integer]
         self._trsv.restype = None
-        self._trtri = found["trtri"]
-        # Fortran: (uplo, diag, n, a, lda, info, hidden lengths of uplo and diag)
-        self._trtri.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ptr, ptr, ptr, ptr, ctypes.c_size_t, ctypes.c_size_t]
-        self._trtri.restype = None
 
     def cholesky(self, a: np.ndarray) -> bool:
         """In place: the upper triangle of the symmetric ``a`` (only it is read) becomes ``U`` with ``a = Uᵀ U``.
@@ -125,22 +119,6 @@ class OpenBLAS:
         if c.shape != (m, m):
             raise ValueError(f"rank update of {c.shape} by {w.shape}")
         self._syrk(_ROW_MAJOR, _UPPER, _TRANS, m, n, -1.0, w.ctypes.data, m, 1.0, c.ctypes.data, m)
-
-    def invert_upper(self, U: np.ndarray) -> np.ndarray:
-        """``U⁻¹`` (upper triangular, zeros below) of the upper triangle of ``U`` (n, n) (``trtri``, s³/3 flops).
-
-        Solves with it are then numpy products: a ``trsv`` through ctypes costs ~15 µs of call overhead, a
-        product with a block of ~166 a few µs, and one factorisation serves up to ~30 solves as a CG preconditioner.
-        """
-        _check(U, 2)
-        n = U.shape[0]
-        out = np.triu(U)
-        size, info = self._int(n), self._int(0)
-        # as in cholesky: LAPACK's lower triangle of the column-major view is the upper triangle here
-        self._trtri(b"L", b"N", ctypes.byref(size), out.ctypes.data, ctypes.byref(size), ctypes.byref(info), 1, 1)
-        if info.value != 0:
-            raise np.linalg.LinAlgError(f"dtrtri: singular triangular factor (info {info.value})")
-        return out
 
     def solve_upper_vector(self, U: np.ndarray, x: np.ndarray, transpose: bool = False) -> None:
         """In place ``x ← U⁻¹ x`` (or ``U⁻ᵀ x``) for the upper triangle ``U`` (n, n) and a vector ``x`` (``trsv``)."""

@@ -186,8 +186,7 @@ class BlockTridiagonal:
           ``B_k X_k``. About 6.7 s³ flops per block.
 
         One solve (:meth:`BlockFactor.apply`) is then two triangular solves or one product with ``S_k⁻¹`` and two
-        products with the coupling per block (about ``3 Σ s_k²`` flops either way), cheap enough to serve as the
-        preconditioner of conjugate gradients over several Newton iterations and animation frames.
+        products with the coupling per block (about ``3 Σ s_k²`` flops either way): small beside the factorisation.
         Raises ``np.linalg.LinAlgError`` for a singular or non-finite block; the caller increases the shift.
 
         With ``inertia`` the factorisation also counts the negative eigenvalues of the matrix: block elimination
@@ -267,21 +266,11 @@ class BlockTridiagonal:
         out = BlockFactor(self.dofs, chols, inverses, couplings, 3 * self.n_nodes, lib)
         out.negative_pivots = negative if inertia else None
         out.lowest_pivot = lowest
-        # keep the storage alive while the factorisation lives, as the inverse form did through its B_k views:
-        # freeing it at once (the cached Gauss–Newton preconditioner outlives many Newton steps) changed glibc's
-        # heap reuse so much that a CircularPleat-antiFacet fold page-faulted 4× more (+2.7 s system time)
-        out.storage = storage
         return out
 
     def solve(self, storage: np.ndarray, rhs: np.ndarray, shift: np.ndarray | float = 0.0) -> np.ndarray:
         """Solve ``(A + diag(shift)) x = rhs`` (natural dof order, length ``3n``) by block Thomas elimination."""
         return self.factor(storage, shift).apply(rhs)
-
-
-INVERT_AFTER = 4
-"""Solves with one factorisation after which :meth:`BlockFactor.apply` inverts its triangular factors (``trtri``,
-about 6 ms at 3,000 faces) so that later solves are numpy products: 0.86 instead of 1.75 ms per solve at 3,000
-faces, where each ``trsv`` through ctypes costs ~15 µs of call overhead."""
 
 
 class BlockFactor:
@@ -299,10 +288,6 @@ class BlockFactor:
         """The degrees of freedom in block order: one gather and one scatter per solve instead of two per block."""
         self.bounds = np.concatenate([[0], np.cumsum([len(d) for d in dofs])])
         self.lib = lib
-        self.solves = 0
-        self.triangular_inverses: list[np.ndarray | None] | None = None
-        """``U_k⁻¹`` of the Cholesky pivots, made by :meth:`apply` once the factorisation has served
-        :data:`INVERT_AFTER` solves (a preconditioner of CG serves ~30; an exact Newton step 2–3)."""
         self.negative_pivots: int | None = None
         """Number of negative eigenvalues of the factored matrix (``None`` when not computed)."""
         self.lowest_pivot: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
@@ -336,10 +321,6 @@ class BlockFactor:
         ``U_k⁻¹ (U_k⁻ᵀ g_k − W_k x_{k+1})`` for a Cholesky pivot.
         """
         rhs = np.asarray(rhs, dtype=np.float64)
-        self.solves += 1
-        if self.solves == INVERT_AFTER and self.lib is not None:
-            self.triangular_inverses = [None if u is None else self.lib.invert_upper(u) for u in self.chols]
-        tri = self.triangular_inverses
         K = len(self.couplings)
         bounds = self.bounds
         r = rhs[self.order]  # block order, a copy: every block below is a contiguous view of it
@@ -350,10 +331,7 @@ class BlockFactor:
             if k > 0:
                 g -= self.couplings[k - 1].T @ carry
             if self.chols[k] is not None:
-                if tri is not None:
-                    g = tri[k].T @ g
-                else:
-                    self.lib.solve_upper_vector(self.chols[k], g, transpose=True)
+                self.lib.solve_upper_vector(self.chols[k], g, transpose=True)
                 half.append(g)
             else:
                 half.append(self.inverses[k] @ g)
@@ -363,10 +341,7 @@ class BlockFactor:
         for k in range(K - 1, -1, -1):
             t = half[k] if nxt is None else half[k] - self.couplings[k] @ nxt
             if self.chols[k] is not None:
-                if tri is not None:
-                    t = tri[k] @ t
-                else:
-                    self.lib.solve_upper_vector(self.chols[k], t)
+                self.lib.solve_upper_vector(self.chols[k], t)
             nxt = t
             y[bounds[k] : bounds[k + 1]] = nxt
         out = np.empty(self.size)

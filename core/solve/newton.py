@@ -97,26 +97,19 @@ class HessianAssembler:
             np.repeat(tri, 3, axis=1).reshape(-1), np.tile(tri, (1, 3)).reshape(-1)
         ).reshape(len(tri), 3, 3, 3, 3)
         self.assemblies = 0
-        self.factor: BlockFactor | None = None
-        """The last Gauss–Newton factorisation (kept for inspection; every step makes a fresh one)."""
-
-    def _work(self) -> dict[str, np.ndarray]:
-        """The scatter index (bars, hinges, faces concatenated; hinge and face blocks ``[e, a, i, b, j]``) and the
-        value vector with its hinge and face parts as ``(e, 12, 12)`` / ``(e, 9, 9)`` views, made once and kept."""
-        work = getattr(self, "_exact_work", None)
-        if work is None:
-            nb, nh, nf = len(self.model.bar_k), len(self.model.hinge_k), len(self.model.triangles)
-            index = [self.bar_index.reshape(-1), self.hinge_index.transpose(0, 1, 3, 2, 4).reshape(-1)]
-            index.append(self.face_index.transpose(0, 1, 3, 2, 4).reshape(-1))
-            values = np.zeros(sum(len(i) for i in index))
-            hinge_out = values[36 * nb : 36 * nb + 144 * nh]
-            work = self._exact_work = {
-                "index": np.concatenate(index),
-                "values": values,
-                "hinge out": hinge_out.reshape(nh, 12, 12),
-                "face out": values[36 * nb + 144 * nh :].reshape(nf, 9, 9),
-            }
-        return work
+        # one scatter index for bars, hinges and faces (hinge and face blocks [e, a, i, b, j]) and the value vector it
+        # reads, with its hinge and face parts as (e, 12, 12) / (e, 9, 9) views written in place by both assemblies;
+        # exact_hessian_blocks keeps its scratch arrays in the same dict
+        nb, nh, nf = len(model.bar_k), len(model.hinge_k), len(tri)
+        index = [self.bar_index.reshape(-1), self.hinge_index.transpose(0, 1, 3, 2, 4).reshape(-1)]
+        index.append(self.face_index.transpose(0, 1, 3, 2, 4).reshape(-1))
+        values = np.zeros(sum(len(i) for i in index))
+        self.work: dict[str, np.ndarray] = {
+            "index": np.concatenate(index),
+            "values": values,
+            "hinge out": values[36 * nb : 36 * nb + 144 * nh].reshape(nh, 12, 12),
+            "face out": values[36 * nb + 144 * nh :].reshape(nf, 9, 9),
+        }
 
     def _bars_into(self, values: np.ndarray, bars: np.ndarray) -> None:
         """Bar blocks ``K`` as the four node blocks ``K, K, −K, −K`` (ii, jj, ij, ji) at the head of ``values``."""
@@ -129,8 +122,8 @@ class HessianAssembler:
     def assemble(self, ev: Evaluation) -> np.ndarray:
         """Gauss–Newton Hessian storage from an evaluation made with ``jacobians=True``: bar blocks, ``k ∇θ∇θᵀ``
         per hinge and ``k_f Σ ∇α∇αᵀ`` per face, each a batched outer product written into the kept value vector
-        (:meth:`_work`)."""
-        work = self._work()
+        (``self.work``)."""
+        work = self.work
         values = work["values"]
         self._bars_into(values, ev.bar_blocks)
         if ev.hinge_grad is not None and len(ev.hinge_k):
@@ -154,7 +147,7 @@ class HessianAssembler:
         no transposing copy). The scatter index (bars, hinges, faces concatenated) and the scratch arrays are made
         on the first call and kept; the hinge and face blocks are computed straight into the kept value vector.
         """
-        work = self._work()
+        work = self.work
         values = work["values"]
         bars, hinges, faces = exact_hessian_blocks(self.model, x, ev, work)
         self._bars_into(values, bars)
@@ -184,6 +177,14 @@ class NewtonStats:
     negative_pivots: int | None = None
     shift_factor: float = SHIFT_FACTOR[1]
     """The current factor of the exact step's damping (see :data:`SHIFT_FACTOR`)."""
+
+    def damp_more(self) -> None:
+        """Ten times the exact step's damping factor, at most :data:`SHIFT_FACTOR`'s largest."""
+        self.shift_factor = min(self.shift_factor * 10.0, SHIFT_FACTOR[2])
+
+    def damp_less(self) -> None:
+        """A tenth of the exact step's damping factor, at least :data:`SHIFT_FACTOR`'s smallest."""
+        self.shift_factor = max(self.shift_factor * 0.1, SHIFT_FACTOR[0])
 
 
 @dataclass
@@ -316,7 +317,7 @@ def newton_steps(
         if len(history) > STAGNATION_WINDOW and min(history[-STAGNATION_WINDOW:]) > 0.5 * min(
             history[:-STAGNATION_WINDOW]
         ):
-            stats.shift_factor = min(stats.shift_factor * 10.0, SHIFT_FACTOR[2])
+            stats.damp_more()
         backing_off = indefinite_at is not None and (
             it < indefinite_at[0] + INDEFINITE_BACKOFF and residual > 0.5 * indefinite_at[1]
         )
@@ -374,7 +375,7 @@ def _exact_step(
     n = model.n_nodes
     H = assembler.assemble_exact(x, ev)
     stats.hessian_assemblies += 1
-    shift = lam + stats.shift_factor * residual * force_scale + rigid_shift(x, ev.forces, fx)
+    shift = _exact_shift(x, ev, residual, lam, force_scale, stats, fx)
     try:
         factor = assembler.matrix.factor(H, fx.shift(shift), inertia=True)
     except np.linalg.LinAlgError:
@@ -411,16 +412,24 @@ def _exact_step(
             ):
                 stats.exact_iterations += 1
                 if a == 1.0 and decrease >= 0.75 * predicted:
-                    stats.shift_factor = max(stats.shift_factor * 0.1, SHIFT_FACTOR[0])
+                    stats.damp_less()
                 elif a < 1.0:
-                    stats.shift_factor = min(stats.shift_factor * 10.0, SHIFT_FACTOR[2])
+                    stats.damp_more()
                 return trial, tev, "newton"
             a *= 0.5
-        stats.shift_factor = min(stats.shift_factor * 10.0, SHIFT_FACTOR[2])
+        stats.damp_more()
         return None
     if residual > SADDLE_RESIDUAL:
         return None
-    return _saddle_step(model, assembler, factor, x, ev, percent, stats, fx)
+    return _saddle_step(model, factor, x, ev, percent, stats, fx)
+
+
+def _exact_shift(
+    x: np.ndarray, ev: Evaluation, residual: float, lam: float, force_scale: float, stats: NewtonStats, fx: Fixed
+) -> float:
+    """Diagonal shift of an exact-Hessian factorisation: ``λ + c·residual`` (``c`` = ``stats.shift_factor``) plus
+    the lift of the rigid rotations (:func:`rigid_shift`)."""
+    return lam + stats.shift_factor * residual * force_scale + rigid_shift(x, ev.forces, fx)
 
 
 def rigid_shift(x: np.ndarray, forces: np.ndarray, fx: Fixed | None = None) -> float:
@@ -467,19 +476,18 @@ def _leave_saddle(
     H = assembler.assemble_exact(x, ev)
     stats.hessian_assemblies += 1
     try:
-        shift = lam + stats.shift_factor * residual * force_scale + rigid_shift(x, ev.forces, fx)
+        shift = _exact_shift(x, ev, residual, lam, force_scale, stats, fx)
         factor = assembler.matrix.factor(H, fx.shift(shift), inertia=True)
     except np.linalg.LinAlgError:
         return None
     stats.negative_pivots = factor.negative_pivots
     if not factor.negative_pivots:
         return None
-    return _saddle_step(model, assembler, factor, x, ev, percent, stats, fx)
+    return _saddle_step(model, factor, x, ev, percent, stats, fx)
 
 
 def _saddle_step(
     model: BarHingeModel,
-    assembler: HessianAssembler,
     factor: BlockFactor,
     x: np.ndarray,
     ev: Evaluation,
@@ -508,7 +516,6 @@ def _saddle_step(
             stats.energy_evaluations += 1
             if tev.energy < ev.energy - 1e-12 * abs(ev.energy):
                 stats.saddle_escapes += 1
-                assembler.factor = None
                 return trial, tev, "saddle"
             a *= 0.5
     return None
@@ -580,13 +587,11 @@ def _gauss_newton_step(
     trial, tev = x, ev
     for _attempt in range(12):
         try:
-            p = _step(model, assembler, ev, rhs, lam, stats, fx.diag).reshape(-1, 3)
+            p = _step(assembler, ev, rhs, lam, stats, fx.diag).reshape(-1, 3)
         except np.linalg.LinAlgError:
-            assembler.factor = None
             lam *= 10.0
             continue
         if not np.all(np.isfinite(p)):
-            assembler.factor = None
             lam *= 10.0
             continue
         biggest = float(np.max(np.linalg.norm(p, axis=1)))
@@ -619,7 +624,6 @@ def _gauss_newton_step(
 
 
 def _step(
-    model: BarHingeModel,
     assembler: HessianAssembler,
     ev: Evaluation,
     rhs: np.ndarray,
@@ -632,7 +636,7 @@ def _step(
     ``pins`` (``3n``, > 0 on fixed degrees of freedom): the step is solved on the free ones only (zero elsewhere)."""
     H = assembler.assemble(ev)
     stats.hessian_assemblies += 1
-    assembler.factor = assembler.matrix.factor(H, lam if pins is None else lam + pins)
+    factor = assembler.matrix.factor(H, lam if pins is None else lam + pins)
     stats.linear_solves += 1
-    p = assembler.factor.apply(rhs)
+    p = factor.apply(rhs)
     return p if pins is None else p * (pins == 0)

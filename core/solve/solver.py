@@ -273,15 +273,13 @@ class Solver:
         intermediate ones to ``continuation_tolerance``, the last to ``tolerance``. Which of several equilibria a
         pattern reaches is then decided by the folding path, not by the first steps of one solve from the flat
         sheet: a static fold at P is the last frame of a 0 → P animation, deterministic (the solver's cached
-        damping and preconditioner are reset first). At the end the exact Hessian's inertia is measured
+        damping is reset first). At the end the exact Hessian's inertia is measured
         (``negative_pivots``: 0 for a stable minimum). Yields a :class:`SolveProgress` per Newton iteration.
         """
         s = self.settings
         model = self.model
         t0 = time.perf_counter()
         self.lm_lambda = 1e-3
-        if self._assembler is not None:
-            self._assembler.factor = None
         n = max(1, int(np.ceil(abs(float(percent)) / max(s.continuation_step, 1e-6) - 1e-9)))
         x, theta = self._start(None, None, float(percent) / n)  # the flat sheet (pins placed, if any)
         previous: tuple[float, np.ndarray, np.ndarray] | None = None
@@ -392,10 +390,9 @@ class Solver:
         check_minimum: bool = False,
     ) -> Generator[SolveProgress, None, FoldResult]:
         """One Newton solve. From the flat sheet (continuation stages, ``check_minimum``) the exact tail starts at
-        residual 1e-2 and a converged state must be a minimum; a warm start from an earlier equilibrium (animation
-        frames, live re-folds) is a small correction that Gauss–Newton with a cached preconditioner does more cheaply
-        (measured: 110 vs 176 ms CPU per frame at 2,048 faces), so there the exact Hessian is used only when
-        Gauss–Newton is slow."""
+        residual ``TAIL_RESIDUAL`` and a converged state must be a minimum; a warm start from an earlier equilibrium
+        (animation frames, live re-folds) is a small correction that one Gauss–Newton step usually makes, so there the
+        exact Hessian is used only when Gauss–Newton is slow."""
         model = self.model
         steps = self._newton(x0, theta_prev, percent, tolerance, max_iterations, check_minimum)
         while True:

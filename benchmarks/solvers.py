@@ -286,6 +286,19 @@ def run_tail(quick: bool = False) -> tuple[list[dict[str, Any]], list[str]]:
     return rows, lines
 
 
+def _replace_section(path: Path, begin: str, end: str, body: str) -> None:
+    """Write ``body`` (which starts with ``begin`` and ends with ``end``) over the section between those markers in
+    ``path``, or append it when the markers are absent; atomically."""
+    from curved_fold.core.io.atomic import atomic_write_text
+
+    text = path.read_text() if path.exists() else ""
+    if begin in text and end in text:
+        text = text[: text.index(begin)] + body + text[text.index(end) + len(end) :]
+    else:
+        text = text.rstrip() + "\n\n" + body + "\n"
+    atomic_write_text(path, text)
+
+
 def write_tail_docs(rows: list[dict[str, Any]], lines: list[str], path: Path = DOC) -> None:
     """Replace the ``--tail`` generated section of ``docs/solver.md`` (appended if its markers are absent)."""
     body = "\n".join(
@@ -302,14 +315,7 @@ def write_tail_docs(rows: list[dict[str, Any]], lines: list[str], path: Path = D
             TAIL_END,
         ]
     )
-    text = path.read_text() if path.exists() else ""
-    if TAIL_BEGIN in text and TAIL_END in text:
-        text = text[: text.index(TAIL_BEGIN)] + body + text[text.index(TAIL_END) + len(TAIL_END) :]
-    else:
-        text = text.rstrip() + "\n\n" + body + "\n"
-    from curved_fold.core.io.atomic import atomic_write_text
-
-    atomic_write_text(path, text)
+    _replace_section(path, TAIL_BEGIN, TAIL_END, body)
 
 
 def run_all(quick: bool = False, echo: bool = True) -> list[dict[str, Any]]:
@@ -431,14 +437,7 @@ def write_docs(rows: list[dict[str, Any]], lines: list[str] | None = None, path:
             END,
         ]
     )
-    text = path.read_text() if path.exists() else ""
-    if BEGIN in text and END in text:
-        text = text[: text.index(BEGIN)] + body + text[text.index(END) + len(END) :]
-    else:
-        text = text.rstrip() + "\n\n" + body + "\n"
-    from curved_fold.core.io.atomic import atomic_write_text
-
-    atomic_write_text(path, text)
+    _replace_section(path, BEGIN, END, body)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -25,7 +25,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import folding, jobs
+from . import app_handlers, folding, jobs
 
 DEBOUNCE_S = 0.25
 """Quiet time after the last edit before a live re-fold runs."""
@@ -178,13 +178,11 @@ def on_depsgraph_update(scene, depsgraph) -> None:
 
 
 def register_extra() -> None:
-    if on_depsgraph_update not in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.append(on_depsgraph_update)
+    app_handlers.attach(bpy.app.handlers.depsgraph_update_post, on_depsgraph_update)
 
 
 def unregister_extra() -> None:
-    if on_depsgraph_update in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.remove(on_depsgraph_update)
+    app_handlers.detach(bpy.app.handlers.depsgraph_update_post, on_depsgraph_update)
     for timer in (_timer, _drive):
         if bpy.app.timers.is_registered(timer):
             bpy.app.timers.unregister(timer)

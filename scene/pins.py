@@ -23,7 +23,7 @@ from bpy.app.handlers import persistent
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
 from ..core.solve.constraints import Constraints
-from . import mesh_object
+from . import app_handlers, mesh_object
 
 PIN_GROUP = "cf_pins"
 GLUE_GROUPS = ("cf_glue_a", "cf_glue_b")
@@ -157,10 +157,8 @@ def on_depsgraph_update(scene, depsgraph) -> None:
 
 
 def register_extra() -> None:
-    if on_depsgraph_update not in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.append(on_depsgraph_update)
+    app_handlers.attach(bpy.app.handlers.depsgraph_update_post, on_depsgraph_update)
 
 
 def unregister_extra() -> None:
-    if on_depsgraph_update in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.remove(on_depsgraph_update)
+    app_handlers.detach(bpy.app.handlers.depsgraph_update_post, on_depsgraph_update)

@@ -23,7 +23,7 @@ import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
-from . import bake, folding, jobs, mesh_object
+from . import app_handlers, bake, folding, jobs, mesh_object
 from .fold_settings import engine_id, settings_dict
 
 FRAME_MAX_ITERATIONS = 12
@@ -243,16 +243,12 @@ def on_load(*_args) -> None:
 
 
 def register_extra() -> None:
-    if on_frame_change not in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.append(on_frame_change)
-    if on_load not in bpy.app.handlers.load_pre:
-        bpy.app.handlers.load_pre.append(on_load)
+    app_handlers.attach(bpy.app.handlers.frame_change_post, on_frame_change)
+    app_handlers.attach(bpy.app.handlers.load_pre, on_load)
 
 
 def unregister_extra() -> None:
-    if on_frame_change in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.remove(on_frame_change)
-    if on_load in bpy.app.handlers.load_pre:
-        bpy.app.handlers.load_pre.remove(on_load)
+    app_handlers.detach(bpy.app.handlers.frame_change_post, on_frame_change)
+    app_handlers.detach(bpy.app.handlers.load_pre, on_load)
     jobs.cancel_all()
     _caches.clear()

@@ -140,6 +140,20 @@ def test_folded_fold_follows_the_spec_and_reads_back(tmp_path: Path) -> None:
     assert single["file_classes"] == ["singleModel"] and len(single["file_frames"]) == 1
 
 
+def test_folded_fold_writes_a_crease_driven_past_flat_as_folded_flat(tmp_path: Path) -> None:
+    """The solver's angles are unwrapped (Carved_Cylinder at 100 % has a valley at 192°: no contact, the layers pass
+    through). The spec's range is [−180°, 180°] with the assignment's sign, and our reader refuses anything else:
+    the frame says 180° (folded flat) and the file reads back."""
+    mesh = square_mesh()
+    f0 = np.column_stack([mesh.vertices, np.zeros(4)])
+    out = tmp_path / "past_flat.fold"
+    write_folded_fold(out, mesh, [f0, f0], [np.array([np.nan] * 4 + [192.1]), np.array([np.nan] * 4 + [-200.0])])
+    frames = json.loads(out.read_text())["file_frames"]
+    assert frames[0]["edges_foldAngle"][4] == 180.0 and frames[1]["edges_foldAngle"][4] == -180.0
+    doc = read_fold(out)
+    np.testing.assert_array_equal(doc.frame_fold_angles[0], [0] * 4 + [180.0])
+
+
 def test_folded_fold_in_cm_and_shape_errors(tmp_path: Path) -> None:
     mesh = square_mesh()
     f0 = np.column_stack([mesh.vertices, np.ones(4)])

@@ -535,7 +535,8 @@ def folded_to_fold(
     The spec's conventions, so that Origami Simulator and FOLD viewers open it flat and fold it: the key frame is
     the crease pattern (2D, ``creasePattern``, the mesh's triangles as faces, target fold angles, diagonals ``F``
     at 0); every folded state is a ``file_frames`` entry (``foldedForm``, 3D, inheriting the key frame, its own
-    simulated ``edges_foldAngle``); several frames make the file an ``animation``.
+    simulated ``edges_foldAngle``, limited to the spec's [−180°, 180°]); several frames make the file an
+    ``animation``.
     """
     n, e = mesh.n_vertices, len(mesh.edges)
     if not frames:
@@ -562,7 +563,10 @@ def folded_to_fold(
                 raise PatternError(
                     f"folded FOLD export: fold angles of frame {k} have {len(a)} entries, mesh has {e} edges"
                 )
-            angles.append(_angles_json(a))
+            # the solver's angles are unwrapped: a crease driven past flat (no contact, as in Origami Simulator)
+            # reads e.g. 192°; the spec's range is [−180°, 180°] with the sign of the assignment, so it is written as
+            # folded flat (the frame's vertices_coords keep the exact geometry)
+            angles.append(_angles_json(np.clip(a, -180.0, 180.0)))
     data = _header("creasePattern", "2D", unit, animation=len(pos) > 1)
     data.update(
         {

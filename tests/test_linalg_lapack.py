@@ -199,6 +199,25 @@ def test_inertia_and_negative_direction_with_mixed_pivots(backend):
     assert bt.factor(storage, 0.0).negative_pivots is None  # not counted unless asked
 
 
+def test_definite_only_stops_at_the_first_indefinite_pivot(backend):
+    """``definite_only``: an indefinite matrix is reported (≥ 1 negative pivot, incomplete, no solve) without the
+    eigenvalues and inverses of the later pivots; a positive definite one is factored exactly as without it."""
+    bt, rows, cols, blocks, A = chain(60, min_block=4, seed=3)
+    n = bt.n_nodes
+    diag = blocks[len(blocks) - n :]
+    middle = bt.blocks[len(bt.blocks) // 2]
+    diag[middle[0]] -= 10.0 * np.eye(3)
+    storage = storage_of(bt, rows, cols, blocks)
+    assert bt.factor(storage, 0.0, inertia=True).negative_pivots >= 3
+    stopped = bt.factor(storage, 0.0, inertia=True, definite_only=True)
+    assert stopped.negative_pivots == 1 and not stopped.complete
+    assert len(stopped.couplings) == len(bt.blocks) // 2  # the blocks before the indefinite one, nothing after
+    spd = bt.factor(storage, 12.0, inertia=True, definite_only=True)
+    assert spd.negative_pivots == 0 and spd.complete
+    rhs = np.random.default_rng(5).normal(size=3 * n)
+    np.testing.assert_array_equal(spd.apply(rhs), bt.factor(storage, 12.0, inertia=True).apply(rhs))
+
+
 @pytest.mark.parametrize("where", ["first", "later", "coupling", "shift"])
 def test_non_finite_blocks_raise(backend, where):
     bt, rows, cols, blocks, A = chain(30, min_block=4, seed=6)

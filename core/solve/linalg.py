@@ -172,7 +172,13 @@ class BlockTridiagonal:
             out[self.dofs[k]] = np.diag(d)
         return out
 
-    def factor(self, storage: np.ndarray, shift: np.ndarray | float = 0.0, inertia: bool = False) -> BlockFactor:
+    def factor(
+        self,
+        storage: np.ndarray,
+        shift: np.ndarray | float = 0.0,
+        inertia: bool = False,
+        definite_only: bool = False,
+    ) -> BlockFactor:
         """Block-Thomas factorisation of ``A + diag(shift)``, kept for cheap repeated solves.
 
         Every pivot (Schur complement) ``S_k = D_k + shift − B_{k−1} S_{k−1}⁻¹ B_{k−1}ᵀ`` is stored in one of two
@@ -194,6 +200,12 @@ class BlockTridiagonal:
         negative eigenvalues as the pivots ``S_k`` together. Each ``S_k`` is tried by Cholesky; only where that
         fails are its eigenvalues computed (see :attr:`BlockFactor.negative_pivots`,
         :meth:`BlockFactor.negative_direction`).
+
+        With ``definite_only`` (and ``inertia``) the elimination stops at the first pivot that is not positive
+        definite: the caller only wants a factorisation of a positive definite matrix (a Newton step) and will not
+        use an indefinite one. The factor returned then has ``negative_pivots == 1`` (at least one; the count is not
+        finished) and ``complete`` false, and cannot solve. Away from a saddle this saves the eigenvalues and
+        inverses of every later pivot: an exact Hessian found indefinite costs ~30 instead of ~110 ms at 3,000 faces.
         """
         shift_vec = np.broadcast_to(np.asarray(shift, dtype=np.float64), (3 * self.n_nodes,))
         lib = lapack.routines()
@@ -242,6 +254,10 @@ class BlockTridiagonal:
                         lib.solve_upper_transposed(U, W)
                     couplings.append(W)
                     continue
+                if inertia and definite_only:
+                    out = BlockFactor(self.dofs, chols, inverses, couplings, 3 * self.n_nodes, lib)
+                    out.negative_pivots, out.complete = 1, False
+                    return out
                 S = pivot(k, full=True)  # not positive definite: its eigenvalues and inverse
                 positive_definite = False
             else:
@@ -253,6 +269,10 @@ class BlockTridiagonal:
                     except np.linalg.LinAlgError:
                         positive_definite = False
             if inertia and not positive_definite:
+                if definite_only:
+                    out = BlockFactor(self.dofs, chols, inverses, couplings, 3 * self.n_nodes, lib)
+                    out.negative_pivots, out.complete = 1, False
+                    return out
                 w, v = np.linalg.eigh(S)
                 negative += int(np.sum(w < 0))
                 if w[0] < lowest[0]:
@@ -292,6 +312,8 @@ class BlockFactor:
         """Number of negative eigenvalues of the factored matrix (``None`` when not computed)."""
         self.lowest_pivot: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
         """``(eigenvalue, block, eigenvector)`` of the most negative pivot eigenvalue found (block −1: none)."""
+        self.complete = True
+        """False for a factorisation stopped at its first indefinite pivot (``definite_only``): it cannot solve."""
 
     def negative_direction(self) -> np.ndarray | None:
         """A direction ``w`` with ``wᵀ A w = λ_min(S_k) < 0`` (natural dof order), or ``None`` if A is not indefinite.

@@ -376,8 +376,8 @@ def _exact_step(
     H = assembler.assemble_exact(x, ev)
     stats.hessian_assemblies += 1
     shift = _exact_shift(x, ev, residual, lam, force_scale, stats, fx)
-    try:
-        factor = assembler.matrix.factor(H, fx.shift(shift), inertia=True)
+    try:  # away from a saddle an indefinite factorisation is of no use: stop at its first negative pivot
+        factor = assembler.matrix.factor(H, fx.shift(shift), inertia=True, definite_only=residual > SADDLE_RESIDUAL)
     except np.linalg.LinAlgError:
         return None
     stats.linear_solves += 1

@@ -70,10 +70,10 @@ def main(argv=None) -> int:
     print(f"load average {la[0]:.1f} / {la[1]:.1f} / {la[2]:.1f}; slice budget {budget:.0f} ms")
     names = args.fixtures or sorted(p.name for p in FIXTURES.glob("*.svg"))
     print(
-        "| pattern | #F | slices | longest slice ms | median slice ms | discretise ms | mesh ms | model ms "
-        "| longest iteration ms | iterations | fold wall s |"
+        "| pattern | #F | slices | longest slice ms | median slice ms | read curves ms | discretise ms (longest "
+        "step) | mesh ms | model ms | longest iteration ms | iterations | fold wall s |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     folded = {}
     for name in names:
         bpy.ops.wm.read_homefile(use_empty=True)
@@ -81,7 +81,7 @@ def main(argv=None) -> int:
         folded[name] = ob.name
         print(
             f"| {name} | {out.mesh.n_faces} | {len(slices)} | {max(slices):.0f} | {np.median(slices):.0f} | "
-            + " | ".join(f"{job.unit_ms.get(k, 0):.0f}" for k in ("start", "mesh", "model", "solve"))
+            + " | ".join(f"{job.unit_ms.get(k, 0):.0f}" for k in ("start", "discretise", "mesh", "model", "solve"))
             + f" | {out.report['iterations']} | {wall:.1f} |",
             flush=True,
         )

@@ -88,7 +88,18 @@ def solver_settings(props, *, max_iterations: int | None = None):
 
 def pattern_from_objects(objects, *, interval: float = 0.0, tolerance: float = 0.0):
     """Discretised :class:`CreasePattern` of crease curve objects; 0 means automatic for interval/tolerance."""
-    from ..core.pattern.discretize import discretize
+    steps = pattern_steps(objects, interval=interval, tolerance=tolerance)
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+
+
+def pattern_steps(objects, *, interval: float = 0.0, tolerance: float = 0.0) -> Generator[str, None, Any]:
+    """:func:`pattern_from_objects` in units for a job: reading the curves from the scene, then each step of the
+    discretisation (``core.pattern.discretize.discretize_steps``); yields the unit's name, returns the pattern."""
+    from ..core.pattern.discretize import discretize_steps
     from .curves import curves_from_objects, stored_pattern
 
     if not objects:
@@ -97,7 +108,8 @@ def pattern_from_objects(objects, *, interval: float = 0.0, tolerance: float = 0
     if stored is not None:
         return stored
     curves = curves_from_objects(objects)
-    return discretize(curves, interval=interval or None, tolerance=tolerance or None)
+    yield "curves read"
+    return (yield from discretize_steps(curves, interval=interval or None, tolerance=tolerance or None))
 
 
 def display_metrics(mesh: FoldMesh, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -307,13 +319,21 @@ def solve_progress(
     return replace(total, iterations=done_steps, force_evaluations=evaluations, simulation_ms=ms)
 
 
-def _mesh_steps(pattern_fn, angle, mesh_type) -> Generator[jobs.Progress, None, Any]:
-    """Discretise (one unit), then triangulate with the ruling swaps (one unit); returns the FoldMesh and the
-    pattern's warnings. Each unit is usually under 100 ms; docs/benchmarks.md lists where it is not."""
+def _mesh_steps(pattern_units, angle, mesh_type) -> Generator[jobs.Progress, None, Any]:
+    """Discretise (in the units of ``pattern_units``, a :func:`pattern_steps` generator), then triangulate with the
+    ruling swaps (one unit); returns the FoldMesh and the pattern's warnings. Each unit is usually under 100 ms;
+    docs/benchmarks.md lists where it is not."""
     from ..core.mesh.build import build_mesh
     from ..core.pipeline import _with_angle
 
-    pattern = _with_angle(override_fold_angles(pattern_fn(), angle), angle)  # Override applies to every crease
+    while True:
+        try:
+            next(pattern_units)
+        except StopIteration as done:
+            pattern = done.value
+            break
+        yield jobs.Progress("discretise")
+    pattern = _with_angle(override_fold_angles(pattern, angle), angle)  # Override applies to every crease
     yield jobs.Progress("mesh")
     mesh = build_mesh(pattern, mesh_type=engine_id(mesh_type))
     yield jobs.Progress("model")
@@ -379,7 +399,7 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
 
     def steps():
         mesh, warnings = yield from _mesh_steps(
-            lambda: pattern_from_objects(sources, **pattern_parameters(options, scene)),
+            pattern_steps(sources, **pattern_parameters(options, scene)),
             override_angle_degrees(options),
             options.mesh_type,
         )
@@ -496,9 +516,7 @@ def refold_job(
     def steps():
         mesh, warnings, remesh = stored, list(stored.warnings), False
         if rebuild:
-            built, warnings = yield from _mesh_steps(
-                lambda: pattern_from_objects(sources, **parameters), angle, mesh_type
-            )
+            built, warnings = yield from _mesh_steps(pattern_steps(sources, **parameters), angle, mesh_type)
             if not same_mesh(built, stored):
                 mesh, remesh = built, True
                 mesh_preview.set_mesh(mesh)

@@ -42,8 +42,9 @@ class JobBusyError(RuntimeError):
 
 @dataclass
 class Progress:
-    """Where a job is: its ``stage`` ("mesh", "model", "solve", "frame"), the solver iteration and residual, the
-    frame k of n (bakes), the fraction done, and positions (mm) worth showing (or None)."""
+    """Where a job is: its ``stage`` ("start", "discretise", "mesh", "model", "solve", "frame"), the solver
+    iteration and residual, the frame k of n (bakes), the fraction done, and positions (mm) worth showing (or
+    None)."""
 
     stage: str
     iteration: int = 0
@@ -57,6 +58,8 @@ class Progress:
         """One status-bar line: iteration and residual, or frame k of n with the time left."""
         if self.stage == "start":
             return "starting"
+        if self.stage == "discretise":
+            return "discretising the crease curves"
         if self.stage == "mesh":
             return "meshing the pattern"
         if self.stage == "model":
@@ -231,8 +234,9 @@ class Job:
         self.units = 0
         self.longest_slice_ms = 0.0
         self.unit_ms: dict[str, float] = {}
-        """Longest unit of work per stage ("start" is the first unit: discretising the curves for a fold or a
-        rebuild, "mesh" the triangulation, "model" the bar-and-hinge model, "solve" a solver iteration)."""
+        """Longest unit of work per stage ("start" is the first unit: reading the curves for a fold or a rebuild,
+        "discretise" a step of their discretisation, "mesh" the triangulation, "model" the bar-and-hinge model,
+        "solve" a solver iteration)."""
         self.started = time.perf_counter()
         self.elapsed_ms = 0.0
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections import Counter
@@ -16,6 +17,7 @@ from curved_fold.core.pattern.discretize import (
     curve_parameters,
     default_parameters,
     discretize,
+    discretize_steps,
     sheet_size,
 )
 from curved_fold.core.pattern.model import CreaseCurve, CurveSegment, PatternError
@@ -225,6 +227,23 @@ def test_every_fixture_discretises(path: Path) -> None:
     # curve pieces are never longer than the interval
     interval, _, _ = default_parameters(sheet_size(drawing.curves))
     assert lengths[p.edge_from_curve].max(initial=0) <= interval * (1 + 1e-9)
+
+
+def test_discretisation_in_units_gives_the_same_pattern_and_each_unit_is_short() -> None:
+    """A Blender job runs ``discretize_steps`` one unit per slice: on the 3,000-segment CircularPleat-antiFacet
+    the units return the same pattern as ``discretize`` (their times are in docs/benchmarks.md)."""
+    curves = read_svg(FIXTURES / "CircularPleat-antiFacet.svg").curves
+    whole = discretize(curves)
+    steps = discretize_steps(curves)
+    names = list(itertools.islice(steps, 4))
+    with pytest.raises(StopIteration) as done:
+        next(steps)
+    units = done.value.value
+    assert names == ["parameters", "curves sampled", "planar arrangement", "clipped to the border"]
+    np.testing.assert_array_equal(units.vertices, whole.vertices)
+    np.testing.assert_array_equal(units.edges, whole.edges)
+    np.testing.assert_array_equal(units.assignments, whole.assignments)
+    assert units.warnings == whole.warnings
 
 
 def test_treble_clef_curved_border_is_one_closed_polyline() -> None:

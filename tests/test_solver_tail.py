@@ -3,10 +3,13 @@ saddle, and the smooth cap of the face-angle energy at squashed corners."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from curved_fold.core.solve import forces as F  # noqa: N812
+from curved_fold.core.solve import newton
 from curved_fold.core.solve.linalg import BlockTridiagonal
 from curved_fold.core.solve.model import build_model, mesh_from_triangles
 from curved_fold.core.solve.newton import HessianAssembler
@@ -110,6 +113,39 @@ def test_saddle_is_left_along_negative_curvature_to_a_stable_minimum():
     assert bulged.energy < flat.energy * (1 - 1e-3)
     x = solver.model.from_mm(bulged.positions)
     assert solver.negative_pivots(x, bulged.theta, 0.0) == 0
+
+
+def test_a_saddle_is_left_on_the_side_the_branch_chooser_picks_whatever_the_round_off():
+    """At the symmetric saddle of the buckling grid (bulge up or down, equal energies, zero gradient) the side
+    taken depends neither on the round-off in the gradient (mirrored here: ±1e-12 along the negative direction)
+    nor on the sign the factorisation gives that direction (LAPACK, numpy version): every variant lands on the same
+    state, the side :func:`newton.branch_chooser` picks."""
+    flat = buckling_solver(exact_tail=False).solve(0.0, continuation=False)
+    solver = buckling_solver(exact_tail=True)
+    model = solver.model
+    x = model.from_mm(flat.positions)
+    ev = F.evaluate(model, x, flat.theta, 0.0, jacobians=True)
+    H = solver.assembler.assemble_exact(x, ev)
+    shift = 1e-7 * solver.force_scale + newton.rigid_shift(x, ev.forces)
+    factor = solver.assembler.matrix.factor(H, shift, inertia=True)
+    assert factor.negative_pivots > 0
+    w = factor.negative_direction().reshape(-1, 3)
+
+    class Flipped:  # the same factorisation, its negative direction with the other sign
+        def negative_direction(self):
+            return -factor.negative_direction()
+
+    escapes = []
+    for noise in (1e-12, -1e-12):
+        tilted = dataclasses.replace(ev, forces=ev.forces + noise * w)
+        for f in (factor, Flipped()):
+            escapes.append(newton._saddle_step(model, f, x, tilted, 0.0, newton.NewtonStats(), newton.Fixed()))
+    assert all(e is not None for e in escapes)
+    for e in escapes[1:]:
+        np.testing.assert_array_equal(e[0], escapes[0][0])
+    assert np.ptp(escapes[0][0][:, 2]) > 0 and escapes[0][1].energy < ev.energy
+    step = escapes[0][0] - x
+    assert float(np.dot(newton.branch_chooser(model.n_nodes), step.reshape(-1))) > 0
 
 
 def test_exact_tail_converges_quadratically():

@@ -495,19 +495,19 @@ def _saddle_step(
     stats: NewtonStats,
     fx: Fixed,
 ) -> tuple[np.ndarray, Evaluation, str] | None:
-    """Step out of a saddle along the factorisation's negative-curvature direction (downhill side first), up to
-    :data:`SADDLE_STEP` per node, halved until the energy falls; ``None`` if it does not."""
+    """Step out of a saddle along the factorisation's negative-curvature direction (first on the side
+    :func:`branch_chooser` picks), up to :data:`SADDLE_STEP` per node, halved until the energy falls; ``None`` if it
+    does not."""
     n = model.n_nodes
     w = factor.negative_direction()
     if w is None:
         return None
-    rhs = fx.forces(ev.forces).reshape(-1)
     w = fx.forces(w.reshape(n, 3))
     if not np.any(w):
         return None
     w *= SADDLE_STEP / max(float(np.max(np.linalg.norm(w, axis=1))), 1e-300)
-    if float(np.dot(rhs, w.reshape(-1))) < 0:
-        w = -w  # downhill (or level) along the negative curvature
+    if float(np.dot(branch_chooser(n), w.reshape(-1))) < 0:
+        w = -w
     for sign in (1.0, -1.0):
         a = 1.0
         for _ls in range(8):
@@ -519,6 +519,20 @@ def _saddle_step(
                 return trial, tev, "saddle"
             a *= 0.5
     return None
+
+
+def branch_chooser(n_nodes: int) -> np.ndarray:
+    """A fixed vector (``3 n_nodes``, the same on every machine) whose sign against a negative-curvature direction
+    picks the side a saddle is left on.
+
+    At a symmetric saddle (a pattern that buckles) the two sides lead to mirror or rotated branches, and the
+    gradient, ~0 there, cannot choose: "downhill" was decided by round-off and by the sign LAPACK gives an
+    eigenvector, which can differ between machines and numpy versions. With a fixed chooser the side is a function
+    of the state alone, the same on every machine; the energy test of :func:`_saddle_step` still tries the other
+    side when this one does not descend.
+    """
+    k = np.arange(3 * n_nodes, dtype=np.float64)
+    return np.cos(k * 2.399963229728653 + 0.5) + 1e-3  # golden-angle phases: no structure a mesh can align with
 
 
 def _geodesic_acceleration(

@@ -3,3 +3,20 @@
 Everything here takes and returns plain data (numpy arrays, small dataclasses) and never touches a Blender scene
 or ``bpy.context``; only the edge swaps use ``bmesh`` (as the design card asks). See ``docs/architecture.md``.
 """
+
+from collections.abc import Generator
+from typing import TypeVar
+
+_R = TypeVar("_R")
+
+
+def run_to_end(steps: Generator[object, None, _R]) -> _R:
+    """Run a generator of units of work to its end and return its value.
+
+    The engine's long stages come in units (``discretize_steps``, ``Solver.solve_steps``, ``newton_steps``) so a
+    Blender job can run one per slice; the command line and the plain functions run them through here."""
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value

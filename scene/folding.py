@@ -88,26 +88,31 @@ def solver_settings(props, *, max_iterations: int | None = None):
 
 def pattern_from_objects(objects, *, interval: float = 0.0, tolerance: float = 0.0):
     """Discretised :class:`CreasePattern` of crease curve objects; 0 means automatic for interval/tolerance."""
-    steps = pattern_steps(objects, interval=interval, tolerance=tolerance)
-    while True:
-        try:
-            next(steps)
-        except StopIteration as done:
-            return done.value
+    from ..core import run_to_end
+
+    return run_to_end(pattern_steps(objects, interval=interval, tolerance=tolerance))
 
 
 def pattern_steps(objects, *, interval: float = 0.0, tolerance: float = 0.0) -> Generator[str, None, Any]:
-    """:func:`pattern_from_objects` in units for a job: reading the curves from the scene, then each step of the
-    discretisation (``core.pattern.discretize.discretize_steps``); yields the unit's name, returns the pattern."""
+    """:func:`pattern_from_objects` in units for a job: reading the curves from the scene (units of
+    ``curves.READ_UNIT_MS``), then each step of the discretisation (``core.pattern.discretize.discretize_steps``);
+    yields the unit's name, returns the pattern."""
     from ..core.pattern.discretize import discretize_steps
-    from .curves import curves_from_objects, stored_pattern
+    from .curves import curves_steps, stored_pattern
 
     if not objects:
         raise PatternError("no crease curves selected: select curve objects that have a crease role")
     stored = stored_pattern(objects)  # an unedited FOLD import: its own pattern, as the command line folds it
     if stored is not None:
         return stored
-    curves = curves_from_objects(objects)
+    reading = curves_steps(objects)
+    while True:
+        try:
+            next(reading)
+        except StopIteration as done:
+            curves = done.value
+            break
+        yield "reading curves"
     yield "curves read"
     return (yield from discretize_steps(curves, interval=interval or None, tolerance=tolerance or None))
 

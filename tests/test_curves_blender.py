@@ -7,6 +7,7 @@ Everything runs against the extension installed from its zip (fixtures ``extensi
 from __future__ import annotations
 
 import importlib
+import itertools
 import math
 
 import numpy as np
@@ -279,6 +280,27 @@ def test_objects_from_curves_round_trip(mod, clean_scene):
     np.testing.assert_allclose(back[2].segments[0].start, (60.0, 50.0), atol=1e-5)
     np.testing.assert_allclose(back[2].segments[-1].end, (40.0, 50.0), atol=1e-5)
     assert back[3].closed and [s.kind for s in back[3].segments] == ["line"] * 3
+
+
+def test_curves_are_read_in_units_for_a_job(mod, clean_scene):
+    """``curves_steps`` (a Blender job reads the curves one unit per slice): with a zero budget it yields before
+    every spline, and returns exactly what ``curves_from_objects`` returns."""
+    mm_per_bu_one(clean_scene)
+    objects = [
+        poly_object("Border", BORDER, role="BORDER"),
+        bezier_object("Valley", VALLEY, role="VALLEY"),
+        bezier_object("Mountain", MOUNTAIN, role="MOUNTAIN", angle=90.0),
+    ]
+    steps = mod.curves_steps(objects, unit_ms=0.0)
+    assert list(itertools.islice(steps, 3)) == [None, None, None]  # three splines, one unit each
+    with pytest.raises(StopIteration) as done:
+        next(steps)
+    whole = mod.curves_from_objects(objects)
+    assert [c.source for c in done.value.value] == [c.source for c in whole]
+    for a, b in zip(done.value.value, whole, strict=True):
+        assert [s.kind for s in a.segments] == [s.kind for s in b.segments]
+        for sa, sb in zip(a.segments, b.segments, strict=True):
+            np.testing.assert_array_equal(sa.points, sb.points)
 
 
 def test_read_blend_file_leaves_the_open_file_alone(mod, clean_scene, tmp_path):

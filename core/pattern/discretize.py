@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import run_to_end
 from .model import CreaseCurve, CreasePattern, CurveSegment, PatternError
 
 REFERENCE_SIZE_MM = 150.0
@@ -891,12 +892,7 @@ def discretize(
     of non-straight segments, and ``warnings`` lists capped parameters, duplicate segments with different
     assignments, removed outside pieces and open borders.
     """
-    steps = discretize_steps(curves, interval=interval, tolerance=tolerance, merge_tolerance=merge_tolerance)
-    while True:
-        try:
-            next(steps)
-        except StopIteration as done:
-            return done.value
+    return run_to_end(discretize_steps(curves, interval=interval, tolerance=tolerance, merge_tolerance=merge_tolerance))
 
 
 def discretize_steps(

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import run_to_end
 from .forces import Evaluation, evaluate, exact_hessian_blocks
 from .linalg import BlockFactor, BlockTridiagonal
 from .model import BarHingeModel
@@ -232,12 +233,7 @@ def newton_solve(
 ) -> tuple[np.ndarray, np.ndarray, Evaluation, NewtonStats, float]:
     """Minimise the energy from ``x0`` (normalised) with fold-angle history ``theta0`` to the end (see
     :func:`newton_steps` for the options). Returns ``(x, theta, evaluation at x, stats, final λ)``."""
-    steps = newton_steps(model, x0, theta0, percent, **options)
-    while True:
-        try:
-            next(steps)
-        except StopIteration as done:
-            return done.value
+    return run_to_end(newton_steps(model, x0, theta0, percent, **options))
 
 
 def newton_steps(

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .. import run_to_end
 from ..mesh.fold_mesh import FoldMesh
 from ..pattern.model import PatternError
 from .constraints import GLUE_STIFFNESS, Constraints
@@ -116,15 +117,6 @@ class SolveProgress:
     iteration: int
     residual: float
     positions: np.ndarray
-
-
-def _drain(steps: Generator[SolveProgress, None, FoldResult]) -> FoldResult:
-    """Run a stepping solve to its end and return its result."""
-    while True:
-        try:
-            next(steps)
-        except StopIteration as done:
-            return done.value
 
 
 class Solver:
@@ -257,8 +249,8 @@ class Solver:
                 dt=self.dt,
             )
         if self._continues(start, continuation):
-            return _drain(self.fold_steps(percent))
-        return _drain(self._fast_steps(x0, theta_prev, percent, t0, check_minimum=start is None))
+            return run_to_end(self.fold_steps(percent))
+        return run_to_end(self._fast_steps(x0, theta_prev, percent, t0, check_minimum=start is None))
 
     def _continues(self, start: np.ndarray | None, continuation: bool | None) -> bool:
         if continuation and start is not None:

@@ -96,6 +96,38 @@ def _separator(
     return sep, [np.concatenate(lower), np.concatenate(upper)]
 
 
+def _along(
+    sep: np.ndarray, indptr: np.ndarray, indices: np.ndarray, dist: np.ndarray, degree: np.ndarray
+) -> np.ndarray:
+    """The separator ``sep`` reordered along itself: breadth-first inside it from a pseudo-peripheral node, one
+    connected piece after the other.
+
+    A separator is a curve across the sheet; a child supernode's boundary is an arc of each ancestor separator it
+    touches, so ordered along the curve it is one contiguous range of the parent's front, and the extend-add of
+    its update is a few dense slices (:meth:`NestedDissection._extend_slices`) instead of a scatter per entry.
+    ``dist`` is used as scratch and left at −1.
+    """
+    if len(sep) <= 2:
+        return sep
+    inside = np.zeros(len(dist), dtype=bool)
+    inside[sep] = True
+    out: list[np.ndarray] = []
+    left = sep
+    while len(left):
+        seed = int(left[np.argmin(degree[left])])
+        levels = _bfs(seed, indptr, indices, inside, dist)
+        piece = np.concatenate(levels)
+        dist[piece] = -1
+        if len(levels) > 1:
+            far = int(levels[-1][np.argmin(degree[levels[-1]])])
+            levels = _bfs(far, indptr, indices, inside, dist)
+            dist[piece] = -1
+        out.extend(levels)
+        inside[piece] = False
+        left = left[inside[left]]
+    return np.concatenate(out)
+
+
 def dissect(n: int, indptr: np.ndarray, indices: np.ndarray, leaf: int) -> tuple[list[np.ndarray], np.ndarray]:
     """Nested dissection of the graph ``(indptr, indices)`` on ``n`` nodes: ``(supernodes, parent)``.
 
@@ -138,6 +170,7 @@ def dissect(n: int, indptr: np.ndarray, indices: np.ndarray, leaf: int) -> tuple
                     dist[level] = k
                 sep, sides = _separator(levels, indptr, indices, dist)
                 dist[comp] = -1
+                sep = _along(sep, indptr, indices, dist, degree)
                 sid = len(supernodes)
                 supernodes.append(sep)
                 parent.append(par)
@@ -189,12 +222,13 @@ class NestedDissection:
       eliminated in the order ``self.node_order``, each supernode a contiguous range ``start[s]:stop[s]`` of it;
     * the boundary ``B_s`` of each supernode: the later-eliminated nodes its column block of the factor reaches,
       ``(neighbours of s ∪ boundaries of its children) \\ (s and earlier)``; they all lie in ancestors of ``s``;
-    * storage: per supernode the row panel ``[A_ss | A_sB]`` (``p × (p + b)``, ``p = 3|s|``, ``b = 3|B_s|``);
-    * per child, the flat index of each entry of its update matrix in the parent's front (extend-add).
+    * storage: per supernode its pivot block ``A_ss`` (``p × p``, ``p = 3|s|``, upper triangle) followed by its
+      coupling ``A_sB`` (``p × b``, ``b = 3|B_s|``), row-major: the first two parts of its front (see
+      :meth:`factor`), filled by one contiguous copy;
+    * per child, how its update matrix is added into the parent's front (:meth:`_extend_plan`).
 
-    ``min_block``: the largest part (nodes) not dissected further (:data:`LEAF_NODES` by default). Parts are cut
-    down to it, so separators are small as well; larger leaves mean fewer, denser supernodes (fewer Python steps,
-    more flops).
+    ``min_block``: the largest part (nodes) not dissected further (:data:`LEAF_NODES` by default). Larger leaves
+    mean fewer, bigger supernodes: fewer Python steps and better BLAS efficiency, more flops.
     """
 
     def __init__(self, n_nodes: int, pairs: np.ndarray, min_block: int | None = None):
@@ -233,7 +267,6 @@ class NestedDissection:
             if self.parent[s] >= 0:
                 p = self.parent[s]
                 self.first_descendant[p] = min(self.first_descendant[p], self.first_descendant[s])
-        # boundaries (elimination positions of nodes, sorted)
         boundary: list[np.ndarray] = []
         for s in range(K):
             nb, _ = _neighbours(self.supernodes[s], indptr, indices)
@@ -244,10 +277,10 @@ class NestedDissection:
         self.pivot_size = 3 * counts
         self.boundary_size = np.array([3 * len(b) for b in boundary], dtype=np.int64)
         p, b = self.pivot_size, self.boundary_size
-        self.offset = np.concatenate([[0], np.cumsum(p * (p + b))]).astype(np.int64)
-        """Start of each supernode's row panel ``[A_ss | A_sB]`` (``p × (p + b)``) in the flat storage."""
-        self.storage_size = int(self.offset[-1])
-        self.offset = self.offset[:-1]
+        offset = np.concatenate([[0], np.cumsum(p * (p + b))]).astype(np.int64)
+        self.offset = offset[:-1]
+        """Start of each supernode's pivot block (then its coupling block) in the flat storage."""
+        self.storage_size = int(offset[-1])
         self.order = (3 * self.node_order[:, None] + np.arange(3)).reshape(-1)
         """The degrees of freedom in elimination order (a solve gathers and scatters once with it)."""
         self.boundary_dofs = [(3 * bd[:, None] + np.arange(3)).reshape(-1) for bd in boundary]
@@ -255,63 +288,75 @@ class NestedDissection:
         # boundary lookup for scatter_index: key s·n + position, ascending
         self._bkeys = np.concatenate([s * n + bd for s, bd in enumerate(boundary)]) if K else np.zeros(0, np.int64)
         self._bstart = np.concatenate([[0], np.cumsum([len(bd) for bd in boundary])]).astype(np.int64)
-        self._extend = [self._extend_index(c) for c in range(K)]
-        diag_nodes = np.arange(n)
-        self._diagonal_index = (
-            self.scatter_index(diag_nodes, diag_nodes).reshape(n, 9)[:, [0, 4, 8]].reshape(-1)
-            if n
-            else np.zeros(0, np.int64)
-        )
+        self._extend = [self._extend_plan(c) for c in range(K)]
+        # plain-int copies for the per-supernode loops of factor/apply
+        self._sizes = [(int(p[s]), int(b[s]), int(self.offset[s]), 3 * int(self.start[s])) for s in range(K)]
+        nodes = np.arange(n)
+        self._diagonal_index = self.scatter_index(nodes, nodes).reshape(n, 9)[:, [0, 4, 8]].reshape(-1)
 
-    # --- setup helpers -------------------------------------------------------------------------------------------
-
-    def front_size(self, s: int) -> int:
-        """Length of the work vector of supernode ``s``: pivot ``p²``, coupling ``p·b``, update ``b²``, one dump."""
-        p, b = int(self.pivot_size[s]), int(self.boundary_size[s])
-        return p * p + p * b + b * b + 1
-
-    def _extend_index(self, c: int) -> np.ndarray | None:
-        """Flat index of each entry of child ``c``'s update matrix (``b_c × b_c``) in its parent's front vector.
+    def _extend_plan(self, c: int) -> tuple | None:
+        """How child ``c``'s update matrix (``b_c × b_c``, upper triangle valid) is added into its parent's front.
 
         The child's boundary dofs are in ascending elimination order, and so is the parent's front (its pivot, then
-        its boundary), so the map is increasing: the upper triangle lands in the parent's upper triangles (pivot,
-        coupling, update), where the factorisation reads it; the lower triangle (not computed by ``syrk``) goes to
-        the dump slot at the end of the front.
+        its boundary), so the map of positions is increasing: the upper triangle lands in the parent's upper
+        triangles (pivot ``S``, coupling ``C``, update ``E``), where the factorisation reads it. Returns
+        ``(before, after)``, the additions into ``S``/``C`` (made before the parent's pivot is factored) and into
+        ``E`` (made after its own update is written there), each either ``("slices", [(region, destination,
+        source), …])``, one dense slice addition per pair of contiguous runs of the map (row run ≤ column run; runs
+        split where the pivot ends), which is what separators ordered along themselves (:func:`_along`) give; or,
+        when the runs are so many that a scatter is cheaper, ``("flat", (source, destination))``: flat positions of
+        the entries in the update and in the parent's front vector. ``None`` for a child without boundary.
         """
         s = int(self.parent[c])
         if s < 0 or self.boundary_size[c] == 0:
             return None
         p, b = int(self.pivot_size[s]), int(self.boundary_size[s])
         dofs = self.boundary_dofs[c]
-        lo = 3 * int(self.start[s])
         inside = dofs < 3 * int(self.stop[s])
         where = np.empty(len(dofs), dtype=np.int64)
-        where[inside] = dofs[inside] - lo
+        where[inside] = dofs[inside] - 3 * int(self.start[s])
         outside = self.boundary_dofs[s]
         k = np.searchsorted(outside, dofs[~inside])
         if np.any(k >= len(outside)) or np.any(outside[np.minimum(k, len(outside) - 1)] != dofs[~inside]):
             raise AssertionError(f"boundary of supernode {c} not inside its parent's front")  # a bug, not input
         where[~inside] = p + k
-        i, j = where[:, None], where[None, :]
-        out = np.full((len(where), len(where)), p * p + p * b + b * b, dtype=np.intp)
-        upper = i <= j
-        pp = upper & (j < p)
-        pb = upper & (i < p) & (j >= p)
-        bb = upper & (i >= p)
-        ii, jj = np.broadcast_to(i, out.shape), np.broadcast_to(j, out.shape)
-        out[pp] = ii[pp] * p + jj[pp]
-        out[pb] = p * p + ii[pb] * b + (jj[pb] - p)
-        out[bb] = p * p + p * b + (ii[bb] - p) * b + (jj[bb] - p)
-        return out.reshape(-1)
+        cuts = np.flatnonzero((np.diff(where) != 1) | (where[1:] == p)) + 1
+        first = np.concatenate([[0], cuts])
+        last = np.concatenate([cuts, [len(where)]])
+        runs = len(first)
+        if runs * (runs + 1) // 2 <= max(4, len(where) ** 2 // 250):
+            before, after = [], []
+            for i in range(runs):
+                r0, r1 = int(where[first[i]]), int(where[first[i]]) + int(last[i] - first[i])
+                for j in range(i, runs):
+                    c0, c1 = int(where[first[j]]), int(where[first[j]]) + int(last[j] - first[j])
+                    src = (slice(int(first[i]), int(last[i])), slice(int(first[j]), int(last[j])))
+                    if c1 <= p:
+                        before.append((0, (slice(r0, r1), slice(c0, c1)), src))
+                    elif r1 <= p:
+                        before.append((1, (slice(r0, r1), slice(c0 - p, c1 - p)), src))
+                    else:
+                        after.append((2, (slice(r0 - p, r1 - p), slice(c0 - p, c1 - p)), src))
+            return ("slices", before), ("slices", after)
+        m = len(where)
+        i, j = np.triu_indices(m)
+        wi, wj = where[i], where[j]
+        source = i * m + j
+        destination = np.where(
+            wj < p, wi * p + wj, np.where(wi < p, p * p + wi * b + (wj - p), p * p + p * b + (wi - p) * b + (wj - p))
+        )
+        late = wi >= p
+        return ("flat", (source[~late], destination[~late])), ("flat", (source[late], destination[late]))
 
     # --- interface of BlockTridiagonal ----------------------------------------------------------------------------
 
     def scatter_index(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """Flat storage index ``(m, 3, 3)`` of the 3×3 block (node ``rows[m]``, node ``cols[m]``).
 
-        A block inside one supernode is stored in its pivot in this orientation (the transposed one is stored
-        too, and the pivot is symmetrised); a block whose row node is eliminated first is stored in that
-        supernode's coupling; the other orientation of such a block maps to ``storage_size`` (a dump slot).
+        A block inside one supernode is stored in its pivot: both orientations are summed into the upper triangle
+        (entry ``(i, j)`` of the matrix at ``(min(i, j), max(i, j))``), which :meth:`factor` halves off the
+        diagonal, so the pivot is the symmetrised matrix. A block whose row node is eliminated first is stored in
+        that supernode's coupling; the other orientation of such a block maps to ``storage_size`` (a dump slot).
         Raises ``ValueError`` for a pair of nodes the ordering was not built for.
         """
         rows = np.asarray(rows, dtype=np.int64).reshape(-1)
@@ -325,11 +370,15 @@ class NestedDissection:
         found = same | (self._bkeys[k] == keys if len(self._bkeys) else np.zeros(len(keys), dtype=bool))
         if not np.all(found):
             raise ValueError("coupling outside the factor's structure (ordering built from other pairs)")
-        col = np.where(same, 3 * self.local[cols], self.pivot_size[sr] + 3 * (k - self._bstart[sr]))
-        width = self.pivot_size[sr] + self.boundary_size[sr]
-        row = 3 * self.local[rows]
-        base = self.offset[sr] + row * width + col
-        out = base[:, None, None] + np.arange(3)[None, :, None] * width[:, None, None] + np.arange(3)[None, None, :]
+        comp = np.arange(3)
+        i = (3 * self.local[rows])[:, None, None] + comp[None, :, None]  # row and column within the front
+        j = np.where(same, 3 * self.local[cols], self.pivot_size[sr] + 3 * (k - self._bstart[sr]))
+        j = j[:, None, None] + comp[None, None, :]
+        p = self.pivot_size[sr][:, None, None]
+        b = self.boundary_size[sr][:, None, None]
+        pivot = np.minimum(i, j) * p + np.maximum(i, j)
+        coupling = p * p + i * b + (j - p)
+        out = self.offset[sr][:, None, None] + np.where(same[:, None, None], pivot, coupling)
         out[~(same | below)] = self.storage_size
         return out
 
@@ -345,14 +394,14 @@ class NestedDissection:
         """The symmetric matrix held in ``storage`` as a dense array, natural dof order (tests and checks)."""
         N = 3 * self.n_nodes
         out = np.zeros((N, N))
-        for s in range(len(self.supernodes)):
-            p, b = int(self.pivot_size[s]), int(self.boundary_size[s])
-            panel = storage[self.offset[s] : self.offset[s] + p * (p + b)].reshape(p, p + b)
-            piv = self.order[3 * self.start[s] : 3 * self.stop[s]]
+        for s, (p, b, off, lo) in enumerate(self._sizes):
+            P = storage[off : off + p * p].reshape(p, p)
+            C = storage[off + p * p : off + p * (p + b)].reshape(p, b)
+            piv = self.order[lo : lo + p]
             bnd = self.order[self.boundary_dofs[s]]
-            out[np.ix_(piv, piv)] += 0.5 * (panel[:, :p] + panel[:, :p].T)
-            out[np.ix_(piv, bnd)] += panel[:, p:]
-            out[np.ix_(bnd, piv)] += panel[:, p:].T
+            out[np.ix_(piv, piv)] += 0.5 * (P + P.T)
+            out[np.ix_(piv, bnd)] += C
+            out[np.ix_(bnd, piv)] += C.T
         return out
 
     def flops(self) -> float:
@@ -364,14 +413,15 @@ class NestedDissection:
     def factor(self, storage: np.ndarray, shift: np.ndarray | float = 0.0, inertia: bool = False) -> DissectionFactor:
         """Multifrontal block factorisation of ``A + diag(shift)`` over the supernode tree, kept for solves.
 
-        For each supernode ``s`` in postorder the *front* is assembled: its pivot ``S = A_ss + shift``, coupling
-        ``C = A_sB`` and a zero ``b × b`` update block, plus the update matrix of each child scattered in by the
-        precomputed extend-add index (upper triangles only). Then, as in :meth:`.linalg.BlockTridiagonal.factor`:
+        For each supernode ``s`` in postorder, its *front* (one work vector: pivot ``S``, ``p × p``; coupling ``C``,
+        ``p × b``; update ``E``, ``b × b``; upper triangles valid) is ``S = A_ss + shift`` and ``C = A_sB`` plus
+        the children's updates there (:meth:`_extend_plan`). Then, as in :meth:`.linalg.BlockTridiagonal.factor`:
 
-        * *Cholesky* (numpy's OpenBLAS, :mod:`.lapack`): ``S = Uᵀ U`` (``potrf``), ``W = U⁻ᵀ C`` (``trsm``), and the
-          update ``E − Wᵀ W`` (``syrk``) is what the parent receives;
-        * *inverse* (``S`` not positive definite, or no OpenBLAS routines): ``S⁻¹``, ``X = S⁻¹ C`` and ``E − Cᵀ X``.
+        * *Cholesky* (numpy's OpenBLAS, :mod:`.lapack`): ``S = Uᵀ U`` (``potrf``), ``W = U⁻ᵀ C`` (``trsm``),
+          ``E = −Wᵀ W`` (``syrk``);
+        * *inverse* (``S`` not positive definite, or no OpenBLAS routines): ``S⁻¹``, ``X = S⁻¹ C``, ``E = −Cᵀ X``;
 
+        and the children's updates in ``E`` are added: ``E`` is what the parent receives.
         This is the block ``LDLᵀ`` factorisation by congruence, ``A = L diag(S_s) Lᵀ`` with the pivots in the
         nested-dissection order, so with ``inertia`` the negative eigenvalues of the matrix are those of the pivots
         together (Sylvester): a pivot that is not positive definite gets ``eigh``, its lowest eigenpair is kept for
@@ -389,26 +439,34 @@ class NestedDissection:
         negative = 0
         lowest: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
 
-        def front(s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-            """The work vector of ``s`` and its pivot, coupling and update views, assembled."""
-            p, b = int(self.pivot_size[s]), int(self.boundary_size[s])
-            buf = np.empty(p * p + p * b + b * b + 1)
-            S = buf[: p * p].reshape(p, p)
-            C = buf[p * p : p * p + p * b].reshape(p, b)
-            E = buf[p * p + p * b : -1].reshape(b, b)
-            panel = storage[self.offset[s] : self.offset[s] + p * (p + b)].reshape(p, p + b)
-            np.add(panel[:, :p], panel[:, :p].T, out=S)
-            S *= 0.5
-            S.flat[:: p + 1] += shift_vec[3 * self.start[s] : 3 * self.stop[s]]
-            C[...] = panel[:, p:]
-            E.fill(0.0)
+        def extend(s: int, regions: tuple, buf: np.ndarray, part: int) -> None:
+            """Add the children's updates into ``S``/``C`` (``part`` 0) or ``E`` (``part`` 1) of ``s``."""
             for c in self.children[s]:
-                if updates[c] is not None and self._extend[c] is not None:
-                    buf[self._extend[c]] += updates[c].reshape(-1)
-            return buf, S, C, E
+                plan, U = self._extend[c], updates[c]
+                if plan is None:
+                    continue
+                kind, ops = plan[part]
+                if kind == "slices":
+                    for region, destination, source in ops:
+                        regions[region][destination] += U[source]
+                else:
+                    buf[ops[1]] += U.reshape(-1)[ops[0]]
+
+        def front(s: int) -> tuple[np.ndarray, tuple]:
+            """The work vector of ``s`` and its views ``(S, C, E)``, with ``S`` and ``C`` assembled."""
+            p, b, off, lo = self._sizes[s]
+            pp, pb = p * p, p * b
+            buf = np.empty(pp + pb + b * b)
+            np.multiply(storage[off : off + pp], 0.5, out=buf[:pp])  # both orientations were summed there
+            np.add(storage[off : off + pp : p + 1], shift_vec[lo : lo + p], out=buf[: pp : p + 1])  # not twice
+            buf[pp : pp + pb] = storage[off + pp : off + pp + pb]
+            regions = (buf[:pp].reshape(p, p), buf[pp : pp + pb].reshape(p, b), buf[pp + pb :].reshape(b, b))
+            extend(s, regions, buf, 0)
+            return buf, regions
 
         for s in range(K):
-            buf, S, C, E = front(s)
+            buf, regions = front(s)
+            S, C, E = regions
             b = C.shape[1]
             if lib is not None:
                 if lib.cholesky(S):
@@ -417,12 +475,14 @@ class NestedDissection:
                         raise np.linalg.LinAlgError(f"non-finite Cholesky factor of supernode {s}")
                     if b:
                         lib.solve_upper_transposed(S, C)
-                        lib.subtract_gram(E, C)
+                        lib.subtract_gram(E, C, replace=True)
+                        extend(s, regions, buf, 1)
                     chols[s], couplings[s], updates[s] = S, C, E
                     for c in self.children[s]:
                         updates[c] = None
                     continue
-                buf, S, C, E = front(s)  # not positive definite: assembled again (potrf overwrote part of it)
+                buf, regions = front(s)  # not positive definite: assembled again (potrf overwrote part of it)
+                S, C, E = regions
                 positive_definite = False
             else:
                 positive_definite = True
@@ -444,7 +504,9 @@ class NestedDissection:
             inverses[s] = Sinv
             if b:
                 X = Sinv @ C
-                E -= C.T @ X
+                np.matmul(C.T, X, out=E)
+                np.negative(E, out=E)
+                extend(s, regions, buf, 1)
                 couplings[s] = X
             updates[s] = E
             for c in self.children[s]:

@@ -32,8 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .dissection import DissectionFactor, NestedDissection
 from .forces import Evaluation, evaluate, exact_hessian_blocks
-from .linalg import BlockFactor, BlockTridiagonal
 from .model import BarHingeModel
 
 MAX_STEP = 0.25
@@ -79,14 +79,15 @@ blocks and a factorisation for nothing (the Gauss–Newton step is taken instead
 
 
 class HessianAssembler:
-    """Scatter indices of every element block into block-tridiagonal storage, computed once per model."""
+    """Scatter indices of every element block into the storage of the sparse factorisation (nested dissection,
+    ``core.solve.dissection``), computed once per model."""
 
-    def __init__(self, model: BarHingeModel, min_block: int = 24):
+    def __init__(self, model: BarHingeModel, min_block: int | None = None):
         self.model = model
         tri = model.triangles
         wings = model.hinge_wings
         pairs = np.concatenate([model.bar_nodes, tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [0, 2]], wings])
-        self.matrix = BlockTridiagonal(model.n_nodes, pairs, min_block)
+        self.matrix = NestedDissection(model.n_nodes, pairs, min_block)
         i, j = model.bar_nodes[:, 0], model.bar_nodes[:, 1]
         self.bar_index = self.matrix.scatter_index(np.concatenate([i, j, i, j]), np.concatenate([i, j, j, i]))
         hn = np.column_stack([wings, model.hinge_edge_nodes])  # (h, 4): w1, w2, v1, v2
@@ -488,7 +489,7 @@ def _leave_saddle(
 
 def _saddle_step(
     model: BarHingeModel,
-    factor: BlockFactor,
+    factor: DissectionFactor,
     x: np.ndarray,
     ev: Evaluation,
     percent: float,
@@ -523,7 +524,7 @@ def _saddle_step(
 
 def _geodesic_acceleration(
     model: BarHingeModel,
-    factor: BlockFactor,
+    factor: DissectionFactor,
     x: np.ndarray,
     ev: Evaluation,
     p: np.ndarray,

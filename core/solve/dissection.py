@@ -212,6 +212,89 @@ def _postorder(parent: np.ndarray) -> np.ndarray:
     return np.array(out, dtype=np.int64)
 
 
+def _symbolic(n: int, sets: list[np.ndarray], tree: np.ndarray, indptr: np.ndarray, indices: np.ndarray) -> tuple:
+    """The supernodes ``sets`` with parents ``tree`` (any order, parents need not come first) put in postorder:
+    ``(supernodes, parent, children, start, stop, position, boundary)`` (see :class:`NestedDissection`).
+
+    The boundary of ``s`` is ``(neighbours of s ∪ boundaries of its children)`` less ``s`` and everything
+    eliminated before it: in a nested-dissection tree, nodes of ancestors of ``s`` only.
+    """
+    post = _postorder(tree)
+    rank = np.empty(len(post), dtype=np.int64)
+    rank[post] = np.arange(len(post))
+    supernodes = [sets[s] for s in post]
+    K = len(supernodes)
+    parent = np.array([rank[tree[s]] if tree[s] >= 0 else -1 for s in post], dtype=np.int64)
+    children: list[list[int]] = [[] for _ in range(K)]
+    for s in range(K):
+        if parent[s] >= 0:
+            children[parent[s]].append(s)
+    counts = np.array([len(s) for s in supernodes], dtype=np.int64)
+    stop = np.cumsum(counts)
+    start = stop - counts
+    position = np.empty(n, dtype=np.int64)
+    if K:
+        position[np.concatenate(supernodes)] = np.arange(n)
+    boundary: list[np.ndarray] = []
+    for s in range(K):
+        nb, _ = _neighbours(supernodes[s], indptr, indices)
+        cand = np.concatenate([position[nb], *(boundary[c] for c in children[s])])
+        boundary.append(np.unique(cand[cand >= stop[s]]))
+    return supernodes, parent, children, start, stop, position, boundary
+
+
+SPEED = (15e9, 50e-6, 3e-9)
+"""Cost model of one supernode for :func:`_amalgamate`: ``(flop rate of the dense BLAS calls, fixed time per
+supernode (Python and call overheads of the factorisation and of ~1.5 solves), time per entry of its update
+matrix moved into the parent's front)``, measured with one OpenBLAS thread on the 2-core test machine."""
+
+
+def _time(p: int, b: int) -> float:
+    """Model time of a supernode of ``p`` pivot and ``b`` boundary unknowns (:data:`SPEED`)."""
+    rate, fixed, per_entry = SPEED
+    return (p**3 / 3 + p * p * b + p * b * b) / rate + fixed + per_entry * b * b
+
+
+def _amalgamate(
+    supernodes: list[np.ndarray], parent: np.ndarray, children: list[list[int]], boundary_size: list[int]
+) -> tuple[list[np.ndarray], np.ndarray]:
+    """Merge supernodes into their parents where the model (:func:`_time`) says one bigger dense pivot is cheaper.
+
+    A child ``c`` of ``s`` merged into it leaves the boundary of ``s`` as it is (``B_c ⊆ s ∪ B_s``): the merged
+    pivot has ``p_c + p_s`` unknowns and the same ``b_s``. It costs the flops of the zeros that ``c`` did not
+    couple to (``B_c`` smaller than ``s ∪ B_s``) and saves a supernode's fixed costs and the extend-add of the
+    child's update (``b_c²`` entries): small separators and leaves whose boundary is nearly their parent's whole
+    front merge. Greedy, bottom-up (postorder): the children of a merged child are candidates in turn. Returns the
+    merged ``(sets, parent)`` (members in elimination order, children first).
+    """
+    K = len(supernodes)
+    size = [3 * len(s) for s in supernodes]
+    members: list[list[int]] = [[s] for s in range(K)]
+    rep = np.arange(K)
+    kids = [list(c) for c in children]
+    for s in range(K):
+        work = list(kids[s])
+        while work:
+            c = work.pop()
+            gain = _time(size[c], boundary_size[c]) + _time(size[s], boundary_size[s])
+            if _time(size[c] + size[s], boundary_size[s]) < gain:
+                size[s] += size[c]
+                members[s] = members[c] + members[s]
+                rep[members[c]] = s
+                kids[s].remove(c)
+                kids[s].extend(kids[c])
+                work.extend(kids[c])
+    roots = [s for s in range(K) if rep[s] == s]
+    index = {s: k for k, s in enumerate(roots)}
+    sets = [np.concatenate([supernodes[m] for m in sorted(members[s])]) for s in roots]
+    tree = np.array([index[int(rep[parent[s]])] if parent[s] >= 0 else -1 for s in roots], dtype=np.int64)
+    return sets, tree
+
+
+class _RestartError(Exception):
+    """A pivot that was not kept turned out not to be positive definite (see :meth:`NestedDissection._factor`)."""
+
+
 class NestedDissection:
     """Storage and multifrontal block-Cholesky solver for a symmetric matrix of 3×3 node blocks whose nonzero
     blocks couple the nodes of ``pairs`` (and each node with itself), in a nested-dissection order.
@@ -231,49 +314,35 @@ class NestedDissection:
     mean fewer, bigger supernodes: fewer Python steps and better BLAS efficiency, more flops.
     """
 
-    def __init__(self, n_nodes: int, pairs: np.ndarray, min_block: int | None = None):
+    def __init__(self, n_nodes: int, pairs: np.ndarray, min_block: int | None = None, amalgamate: bool = True):
         leaf = LEAF_NODES if min_block is None else max(1, int(min_block))
         self.n_nodes = n = int(n_nodes)
         pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
         indptr, indices = _csr(n, pairs)
         sets, tree = dissect(n, indptr, indices, leaf)
-        post = _postorder(tree)
-        rank = np.empty(len(post), dtype=np.int64)
-        rank[post] = np.arange(len(post))
-        self.supernodes = [sets[s] for s in post]
-        """Node indices of each supernode, in elimination (post)order."""
+        sym = _symbolic(n, sets, tree, indptr, indices)
+        if amalgamate:
+            sets, tree = _amalgamate(*sym[:3], [3 * len(b) for b in sym[6]])
+            sym = _symbolic(n, sets, tree, indptr, indices)
+        self.supernodes, self.parent, self.children, self.start, self.stop, self.position, self.boundary = sym
+        """``supernodes``: node indices of each supernode, in elimination (post)order; ``parent``: parent supernode
+        (−1: a root); ``start``/``stop``: its range of elimination positions; ``position``: elimination position of
+        each node; ``boundary``: elimination positions of the boundary nodes ``B_s`` of each, ascending."""
         K = len(self.supernodes)
-        self.parent = np.array([rank[tree[s]] if tree[s] >= 0 else -1 for s in post], dtype=np.int64)
-        """Parent supernode of each supernode (−1: a root)."""
+        counts = self.stop - self.start
         self.node_order = np.concatenate(self.supernodes) if K else np.zeros(0, dtype=np.int64)
         """The nodes in elimination order."""
-        counts = np.array([len(s) for s in self.supernodes], dtype=np.int64)
-        self.stop = np.cumsum(counts)
-        self.start = self.stop - counts
-        self.position = np.empty(n, dtype=np.int64)
-        """Elimination position of each node."""
-        self.position[self.node_order] = np.arange(n)
         self.supernode_of = np.repeat(np.arange(K), counts)[self.position]
         """Supernode of each node."""
         self.local = self.position - self.start[self.supernode_of]
         """Position of each node within its supernode."""
-        self.children: list[list[int]] = [[] for _ in range(K)]
-        for s in range(K):
-            if self.parent[s] >= 0:
-                self.children[self.parent[s]].append(s)
         self.first_descendant = np.arange(K)
         """First supernode of the subtree of each supernode (postorder: the subtree is ``first_descendant[s]:s+1``)."""
         for s in range(K):
             if self.parent[s] >= 0:
                 p = self.parent[s]
                 self.first_descendant[p] = min(self.first_descendant[p], self.first_descendant[s])
-        boundary: list[np.ndarray] = []
-        for s in range(K):
-            nb, _ = _neighbours(self.supernodes[s], indptr, indices)
-            cand = np.concatenate([self.position[nb], *(boundary[c] for c in self.children[s])])
-            boundary.append(np.unique(cand[cand >= self.stop[s]]))
-        self.boundary = boundary
-        """Elimination positions of the boundary nodes ``B_s`` of each supernode, ascending."""
+        boundary = self.boundary
         self.pivot_size = 3 * counts
         self.boundary_size = np.array([3 * len(b) for b in boundary], dtype=np.int64)
         p, b = self.pivot_size, self.boundary_size
@@ -305,7 +374,8 @@ class NestedDissection:
         source), …])``, one dense slice addition per pair of contiguous runs of the map (row run ≤ column run; runs
         split where the pivot ends), which is what separators ordered along themselves (:func:`_along`) give; or,
         when the runs are so many that a scatter is cheaper, ``("flat", (source, destination))``: flat positions of
-        the entries in the update and in the parent's front vector. ``None`` for a child without boundary.
+        the entries in the update and in the parent's work vector (pivot and coupling) or its update block.
+        ``None`` for a child without boundary.
         """
         s = int(self.parent[c])
         if s < 0 or self.boundary_size[c] == 0:
@@ -343,7 +413,7 @@ class NestedDissection:
         wi, wj = where[i], where[j]
         source = i * m + j
         destination = np.where(
-            wj < p, wi * p + wj, np.where(wi < p, p * p + wi * b + (wj - p), p * p + p * b + (wi - p) * b + (wj - p))
+            wj < p, wi * p + wj, np.where(wi < p, p * p + wi * b + (wj - p), (wi - p) * b + (wj - p))
         )
         late = wi >= p
         return ("flat", (source[~late], destination[~late])), ("flat", (source[late], destination[late]))
@@ -429,60 +499,71 @@ class NestedDissection:
         pivot; +inf on the diagonal (an infinitely stiff degree of freedom) gives that unknown 0, as the block
         tridiagonal factorisation does.
         """
+        try:
+            return self._factor(storage, shift, inertia, backup=inertia)
+        except _RestartError:  # a pivot was not positive definite and had not been kept: again, keeping every pivot
+            return self._factor(storage, shift, inertia, backup=True)
+
+    def _factor(self, storage: np.ndarray, shift: np.ndarray | float, inertia: bool, backup: bool) -> DissectionFactor:
+        """:meth:`factor`; ``backup``: copy each pivot before ``potrf`` (which overwrites it when it fails), else
+        raise :class:`_RestartError` at the first pivot that is not positive definite."""
         shift_vec = np.broadcast_to(np.asarray(shift, dtype=np.float64), (3 * self.n_nodes,))[self.order]
         lib = lapack.routines()
         K = len(self.supernodes)
         chols: list[np.ndarray | None] = [None] * K
         inverses: list[np.ndarray | None] = [None] * K
         couplings: list[np.ndarray | None] = [None] * K
-        updates: list[np.ndarray | None] = [None] * K
+        fronts: list[tuple | None] = [None] * K
         negative = 0
         lowest: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
 
-        def extend(s: int, regions: tuple, buf: np.ndarray, part: int) -> None:
-            """Add the children's updates into ``S``/``C`` (``part`` 0) or ``E`` (``part`` 1) of ``s``."""
-            for c in self.children[s]:
-                plan, U = self._extend[c], updates[c]
-                if plan is None:
-                    continue
-                kind, ops = plan[part]
+        def front(s: int) -> tuple:
+            """The front of ``s``: work vector (pivot ``S`` and coupling ``C``) assembled from the storage and the
+            shift, and a zero update block ``E``; ``(buf, S, C, E)``."""
+            p, b, off, lo = self._sizes[s]
+            pp, pb = p * p, p * b
+            buf = np.empty(pp + pb)
+            np.multiply(storage[off : off + pp], 0.5, out=buf[:pp])  # both orientations were summed there
+            np.add(storage[off : off + pp : p + 1], shift_vec[lo : lo + p], out=buf[: pp : p + 1])  # not twice
+            buf[pp:] = storage[off + pp : off + pp + pb]
+            return buf, buf[:pp].reshape(p, p), buf[pp:].reshape(p, b), np.zeros((b, b))
+
+        def push(c: int, U: np.ndarray) -> None:
+            """Add the update ``U`` of ``c`` into its parent's front (made now if it is the first child to come),
+            while ``U`` is still in the cache."""
+            plan = self._extend[c]
+            if plan is None:
+                return
+            s = int(self.parent[c])
+            if fronts[s] is None:
+                fronts[s] = front(s)
+            buf, *regions = fronts[s]
+            for flat, (kind, ops) in zip((buf, regions[2].reshape(-1)), plan, strict=True):
                 if kind == "slices":
                     for region, destination, source in ops:
                         regions[region][destination] += U[source]
                 else:
-                    buf[ops[1]] += U.reshape(-1)[ops[0]]
-
-        def front(s: int) -> tuple[np.ndarray, tuple]:
-            """The work vector of ``s`` and its views ``(S, C, E)``, with ``S`` and ``C`` assembled."""
-            p, b, off, lo = self._sizes[s]
-            pp, pb = p * p, p * b
-            buf = np.empty(pp + pb + b * b)
-            np.multiply(storage[off : off + pp], 0.5, out=buf[:pp])  # both orientations were summed there
-            np.add(storage[off : off + pp : p + 1], shift_vec[lo : lo + p], out=buf[: pp : p + 1])  # not twice
-            buf[pp : pp + pb] = storage[off + pp : off + pp + pb]
-            regions = (buf[:pp].reshape(p, p), buf[pp : pp + pb].reshape(p, b), buf[pp + pb :].reshape(b, b))
-            extend(s, regions, buf, 0)
-            return buf, regions
+                    flat[ops[1]] += U.reshape(-1)[ops[0]]
 
         for s in range(K):
-            buf, regions = front(s)
-            S, C, E = regions
+            buf, S, C, E = fronts[s] if fronts[s] is not None else front(s)
+            fronts[s] = None
             b = C.shape[1]
             if lib is not None:
+                kept = S.copy() if backup else None
                 if lib.cholesky(S):
                     # a NaN anywhere in the pivot reaches the diagonal of U; +inf there is kept (see above)
                     if np.isnan(np.diagonal(S)).any():
                         raise np.linalg.LinAlgError(f"non-finite Cholesky factor of supernode {s}")
                     if b:
                         lib.solve_upper_transposed(S, C)
-                        lib.subtract_gram(E, C, replace=True)
-                        extend(s, regions, buf, 1)
-                    chols[s], couplings[s], updates[s] = S, C, E
-                    for c in self.children[s]:
-                        updates[c] = None
+                        lib.subtract_gram(E, C)
+                        push(s, E)
+                    chols[s], couplings[s] = S, C
                     continue
-                buf, regions = front(s)  # not positive definite: assembled again (potrf overwrote part of it)
-                S, C, E = regions
+                if kept is None:
+                    raise _RestartError
+                S = kept
                 positive_definite = False
             else:
                 positive_definite = True
@@ -504,13 +585,9 @@ class NestedDissection:
             inverses[s] = Sinv
             if b:
                 X = Sinv @ C
-                np.matmul(C.T, X, out=E)
-                np.negative(E, out=E)
-                extend(s, regions, buf, 1)
+                E -= C.T @ X
+                push(s, E)
                 couplings[s] = X
-            updates[s] = E
-            for c in self.children[s]:
-                updates[c] = None
         out = DissectionFactor(self, chols, inverses, couplings, lib)
         out.negative_pivots = negative if inertia else None
         out.lowest_pivot = lowest

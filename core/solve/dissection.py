@@ -193,13 +193,25 @@ def dissect(n: int, indptr: np.ndarray, indices: np.ndarray, leaf: int) -> tuple
     return supernodes, np.array(parent, dtype=np.int64)
 
 
-def _postorder(parent: np.ndarray) -> np.ndarray:
-    """A postorder of the forest ``parent`` (children before their parent, every subtree contiguous)."""
+def _postorder(parent: np.ndarray, weight: np.ndarray | None = None) -> np.ndarray:
+    """A postorder of the forest ``parent`` (children before their parent, every subtree contiguous).
+
+    With ``weight`` (per node of the forest), the children of each node come heaviest subtree first: the parent's
+    front is made when its first child is done, and the lighter subtrees after it evict less of it from the cache
+    before they add their updates (multifrontal practice, Liu 1986).
+    """
     K = len(parent)
     children: list[list[int]] = [[] for _ in range(K)]
     roots = []
     for s in range(K):
         (children[parent[s]] if parent[s] >= 0 else roots).append(s)
+    if weight is not None:
+        total = np.asarray(weight, dtype=np.float64).copy()
+        for s in _postorder(parent):
+            if parent[s] >= 0:
+                total[parent[s]] += total[s]
+        for kids in children:
+            kids.sort(key=lambda c: -total[c])
     out: list[int] = []
     stack = [(r, False) for r in reversed(roots)]
     while stack:
@@ -219,7 +231,7 @@ def _symbolic(n: int, sets: list[np.ndarray], tree: np.ndarray, indptr: np.ndarr
     The boundary of ``s`` is ``(neighbours of s ∪ boundaries of its children)`` less ``s`` and everything
     eliminated before it: in a nested-dissection tree, nodes of ancestors of ``s`` only.
     """
-    post = _postorder(tree)
+    post = _postorder(tree, np.array([len(s) for s in sets], dtype=np.float64) ** 1.5)
     rank = np.empty(len(post), dtype=np.int64)
     rank[post] = np.arange(len(post))
     supernodes = [sets[s] for s in post]
@@ -243,46 +255,93 @@ def _symbolic(n: int, sets: list[np.ndarray], tree: np.ndarray, indptr: np.ndarr
     return supernodes, parent, children, start, stop, position, boundary
 
 
-SPEED = (15e9, 50e-6, 3e-9)
-"""Cost model of one supernode for :func:`_amalgamate`: ``(flop rate of the dense BLAS calls, fixed time per
-supernode (Python and call overheads of the factorisation and of ~1.5 solves), time per entry of its update
-matrix moved into the parent's front)``, measured with one OpenBLAS thread on the 2-core test machine."""
+SPEED = (13e9, 15e9, 30e9, 40e-6, 3e-9, 1.5e-9)
+"""Cost model of one supernode for :func:`_amalgamate`: flop rates of ``potrf``, ``trsm`` and ``syrk``, the fixed
+time per supernode (Python and call overheads of a factorisation and of ~1.5 solves), the time per entry of its
+update moved into the parent's front and per entry of its front made (copies, zeros). Measured with one OpenBLAS
+thread on the 2-core test machine (CircularPleat-antiFacet, fronts of 100–400 unknowns)."""
 
 
-def _time(p: int, b: int) -> float:
-    """Model time of a supernode of ``p`` pivot and ``b`` boundary unknowns (:data:`SPEED`)."""
-    rate, fixed, per_entry = SPEED
-    return (p**3 / 3 + p * p * b + p * b * b) / rate + fixed + per_entry * b * b
+def _time(p: int, b: int, q: int | None = None) -> float:
+    """Model time of a supernode of ``p`` pivot and ``b`` boundary unknowns, ``q`` of the pivot's rows coupled to
+    the boundary (all by default; :data:`SPEED`)."""
+    potrf, trsm, syrk, fixed, per_update, per_front = SPEED
+    q = p if q is None else q
+    flops = p**3 / 3 / potrf + q * q * b / trsm + q * b * b / syrk
+    return flops + fixed + per_update * b * b + per_front * (p * p + p * b + b * b)
 
 
-def _amalgamate(
-    supernodes: list[np.ndarray], parent: np.ndarray, children: list[list[int]], boundary_size: list[int]
-) -> tuple[list[np.ndarray], np.ndarray]:
+def _coupled_rows(sym: tuple, indptr: np.ndarray, indices: np.ndarray) -> list[np.ndarray]:
+    """For each supernode of the symbolic structure ``sym`` (:func:`_symbolic`), which of its nodes have a nonzero
+    row in the coupling ``C = A_sB + (children's updates)``: a neighbour in ``B_s``, or membership of the
+    boundary of a child whose boundary reaches beyond ``s`` (its update then couples the two)."""
+    supernodes, parent, children, start, stop, position, boundary = sym
+    out = []
+    for s in range(len(supernodes)):
+        hit = np.zeros(len(supernodes[s]), dtype=bool)
+        nb, owner = _neighbours(supernodes[s], indptr, indices)
+        hit[owner[position[nb] >= stop[s]]] = True
+        for c in children[s]:
+            bc = boundary[c]
+            if len(bc) and bc[-1] >= stop[s]:
+                hit[bc[bc < stop[s]] - start[s]] = True
+        out.append(hit)
+    return out
+
+
+def _amalgamate(sym: tuple, indptr: np.ndarray, indices: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
     """Merge supernodes into their parents where the model (:func:`_time`) says one bigger dense pivot is cheaper.
 
     A child ``c`` of ``s`` merged into it leaves the boundary of ``s`` as it is (``B_c ⊆ s ∪ B_s``): the merged
-    pivot has ``p_c + p_s`` unknowns and the same ``b_s``. It costs the flops of the zeros that ``c`` did not
-    couple to (``B_c`` smaller than ``s ∪ B_s``) and saves a supernode's fixed costs and the extend-add of the
-    child's update (``b_c²`` entries): small separators and leaves whose boundary is nearly their parent's whole
-    front merge. Greedy, bottom-up (postorder): the children of a merged child are candidates in turn. Returns the
-    merged ``(sets, parent)`` (members in elimination order, children first).
+    pivot has ``p_c + p_s`` unknowns and the same ``b_s``; its rows coupled to ``B_s`` are those of ``s`` and the
+    nodes of ``c`` next to ``B_s`` (or in a boundary that reaches it), which :meth:`NestedDissection.factor` puts
+    last, so the rows of ``c`` deep inside cost only in the Cholesky of the pivot. Merging saves a supernode's
+    fixed costs and the extend-add of the child's update (``b_c²`` entries); small separators and leaves whose
+    boundary is nearly their parent's whole front merge. Greedy, bottom-up (postorder): the children of a merged
+    child are candidates in turn. Returns the merged ``(sets, parent)`` (members in elimination order, children
+    first).
     """
+    supernodes, parent, children, start, stop, position, boundary = sym
     K = len(supernodes)
+    n = len(position)
+    # the latest elimination position among each node's neighbours, by position
+    reach = np.full(n, -1, dtype=np.int64)
+    if len(indices):
+        rows = np.repeat(np.arange(n), np.diff(indptr))
+        np.maximum.at(reach, position[rows], position[indices])
+    mark = np.zeros(n, dtype=bool)
+
+    def coupled(members: list[int], kids: list[int], stop_s: int) -> int:
+        """Unknowns of the pivot ``members`` (with children ``kids``) coupled beyond ``stop_s``."""
+        pos = np.concatenate([np.arange(start[m], stop[m]) for m in members])
+        hit = reach[pos] >= stop_s
+        touched = [boundary[g] for g in kids if len(boundary[g]) and boundary[g][-1] >= stop_s]
+        if touched:
+            t = np.concatenate(touched)
+            mark[t] = True
+            hit |= mark[pos]
+            mark[t] = False
+        return 3 * int(np.count_nonzero(hit))
+
     size = [3 * len(s) for s in supernodes]
+    bsize = [3 * len(b) for b in boundary]
     members: list[list[int]] = [[s] for s in range(K)]
-    rep = np.arange(K)
     kids = [list(c) for c in children]
+    rows_of = [coupled([s], kids[s], stop[s]) for s in range(K)]
+    rep = np.arange(K)
     for s in range(K):
         work = list(kids[s])
         while work:
             c = work.pop()
-            gain = _time(size[c], boundary_size[c]) + _time(size[s], boundary_size[s])
-            if _time(size[c] + size[s], boundary_size[s]) < gain:
+            merged_kids = [k for k in kids[s] if k != c] + kids[c]
+            q = coupled(members[c] + members[s], merged_kids, stop[s])
+            apart = _time(size[c], bsize[c], rows_of[c]) + _time(size[s], bsize[s], rows_of[s])
+            if _time(size[c] + size[s], bsize[s], q) < apart:
                 size[s] += size[c]
+                rows_of[s] = q
                 members[s] = members[c] + members[s]
                 rep[members[c]] = s
-                kids[s].remove(c)
-                kids[s].extend(kids[c])
+                kids[s] = merged_kids
                 work.extend(kids[c])
     roots = [s for s in range(K) if rep[s] == s]
     index = {s: k for k, s in enumerate(roots)}
@@ -322,8 +381,17 @@ class NestedDissection:
         sets, tree = dissect(n, indptr, indices, leaf)
         sym = _symbolic(n, sets, tree, indptr, indices)
         if amalgamate:
-            sets, tree = _amalgamate(*sym[:3], [3 * len(b) for b in sym[6]])
+            sets, tree = _amalgamate(sym, indptr, indices)
             sym = _symbolic(n, sets, tree, indptr, indices)
+        # within each supernode the nodes whose coupling row is zero first: the triangular solve and the rank
+        # update then skip them (W = U⁻ᵀ C has the zero rows of C at its top)
+        coupled = _coupled_rows(sym, indptr, indices)
+        sym = _symbolic(
+            n, [np.concatenate([N[~c], N[c]]) for N, c in zip(sym[0], coupled, strict=True)], sym[1], indptr, indices
+        )
+        coupled = _coupled_rows(sym, indptr, indices)
+        self.zero_rows = np.array([3 * (int(np.argmax(c)) if c.any() else len(c)) for c in coupled], dtype=np.int64)
+        """Leading unknowns of each pivot whose rows of the coupling are zero (skipped by ``trsm`` and ``syrk``)."""
         self.supernodes, self.parent, self.children, self.start, self.stop, self.position, self.boundary = sym
         """``supernodes``: node indices of each supernode, in elimination (post)order; ``parent``: parent supernode
         (−1: a root); ``start``/``stop``: its range of elimination positions; ``position``: elimination position of
@@ -359,7 +427,10 @@ class NestedDissection:
         self._bstart = np.concatenate([[0], np.cumsum([len(bd) for bd in boundary])]).astype(np.int64)
         self._extend = [self._extend_plan(c) for c in range(K)]
         # plain-int copies for the per-supernode loops of factor/apply
-        self._sizes = [(int(p[s]), int(b[s]), int(self.offset[s]), 3 * int(self.start[s])) for s in range(K)]
+        self._sizes = [
+            (int(p[s]), int(b[s]), int(self.offset[s]), 3 * int(self.start[s]), int(self.zero_rows[s]))
+            for s in range(K)
+        ]
         nodes = np.arange(n)
         self._diagonal_index = self.scatter_index(nodes, nodes).reshape(n, 9)[:, [0, 4, 8]].reshape(-1)
 
@@ -464,7 +535,7 @@ class NestedDissection:
         """The symmetric matrix held in ``storage`` as a dense array, natural dof order (tests and checks)."""
         N = 3 * self.n_nodes
         out = np.zeros((N, N))
-        for s, (p, b, off, lo) in enumerate(self._sizes):
+        for s, (p, b, off, lo, _) in enumerate(self._sizes):
             P = storage[off : off + p * p].reshape(p, p)
             C = storage[off + p * p : off + p * (p + b)].reshape(p, b)
             piv = self.order[lo : lo + p]
@@ -475,10 +546,12 @@ class NestedDissection:
         return out
 
     def flops(self) -> float:
-        """Floating-point operations of one factorisation with Cholesky pivots (potrf p³/3, trsm p²b, syrk pb²)."""
+        """Floating-point operations of one factorisation with Cholesky pivots (potrf p³/3, trsm q²b, syrk qb² with
+        ``q`` the pivot's rows coupled to its boundary)."""
         p = self.pivot_size.astype(np.float64)
         b = self.boundary_size.astype(np.float64)
-        return float(np.sum(p**3 / 3 + p * p * b + p * b * b))
+        q = p - self.zero_rows
+        return float(np.sum(p**3 / 3 + q * q * b + q * b * b))
 
     def factor(self, storage: np.ndarray, shift: np.ndarray | float = 0.0, inertia: bool = False) -> DissectionFactor:
         """Multifrontal block factorisation of ``A + diag(shift)`` over the supernode tree, kept for solves.
@@ -513,6 +586,7 @@ class NestedDissection:
         chols: list[np.ndarray | None] = [None] * K
         inverses: list[np.ndarray | None] = [None] * K
         couplings: list[np.ndarray | None] = [None] * K
+        first_row = [0] * K
         fronts: list[tuple | None] = [None] * K
         negative = 0
         lowest: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
@@ -520,7 +594,7 @@ class NestedDissection:
         def front(s: int) -> tuple:
             """The front of ``s``: work vector (pivot ``S`` and coupling ``C``) assembled from the storage and the
             shift, and a zero update block ``E``; ``(buf, S, C, E)``."""
-            p, b, off, lo = self._sizes[s]
+            p, b, off, lo, _ = self._sizes[s]
             pp, pb = p * p, p * b
             buf = np.empty(pp + pb)
             np.multiply(storage[off : off + pp], 0.5, out=buf[:pp])  # both orientations were summed there
@@ -555,11 +629,14 @@ class NestedDissection:
                     # a NaN anywhere in the pivot reaches the diagonal of U; +inf there is kept (see above)
                     if np.isnan(np.diagonal(S)).any():
                         raise np.linalg.LinAlgError(f"non-finite Cholesky factor of supernode {s}")
+                    k = self._sizes[s][4]
                     if b:
-                        lib.solve_upper_transposed(S, C)
-                        lib.subtract_gram(E, C)
+                        if k < C.shape[0]:  # rows above k of C, so of W, are zero
+                            lib.solve_upper_transposed(S[k:, k:], C[k:])
+                            lib.subtract_gram(E, C[k:])
                         push(s, E)
-                    chols[s], couplings[s] = S, C
+                        couplings[s] = C[k:]
+                    chols[s], first_row[s] = S, k
                     continue
                 if kept is None:
                     raise _RestartError
@@ -588,7 +665,7 @@ class NestedDissection:
                 E -= C.T @ X
                 push(s, E)
                 couplings[s] = X
-        out = DissectionFactor(self, chols, inverses, couplings, lib)
+        out = DissectionFactor(self, chols, inverses, couplings, first_row, lib)
         out.negative_pivots = negative if inertia else None
         out.lowest_pivot = lowest
         return out
@@ -602,13 +679,15 @@ class DissectionFactor:
     """A multifrontal factorisation (see :meth:`NestedDissection.factor`); :meth:`apply` solves with it.
 
     Per supernode ``s`` either ``chols[s]`` (``U_s``, ``S_s = U_sᵀ U_s``, in its upper triangle) or ``inverses[s]``
-    (``S_s⁻¹``) is set; ``couplings[s]`` (``p × b``, ``None`` without boundary) is ``W_s = U_s⁻ᵀ C_s`` or
-    ``X_s = S_s⁻¹ C_s`` accordingly, ``C_s`` the coupling of the pivot to its boundary in the front.
+    (``S_s⁻¹``) is set; ``couplings[s]`` (``None`` without boundary) holds the rows from ``first_row[s]`` on of
+    ``W_s = U_s⁻ᵀ C_s`` (the rows above are zero) or all of ``X_s = S_s⁻¹ C_s`` (``first_row[s]`` 0), ``C_s`` the
+    coupling of the pivot to its boundary in the front.
     """
 
-    def __init__(self, structure: NestedDissection, chols, inverses, couplings, lib: lapack.OpenBLAS | None):
+    def __init__(self, structure: NestedDissection, chols, inverses, couplings, first_row, lib: lapack.OpenBLAS | None):
         self.structure = structure
-        self.chols, self.inverses, self.couplings, self.lib = chols, inverses, couplings, lib
+        self.chols, self.inverses, self.couplings, self.first_row = chols, inverses, couplings, first_row
+        self.lib = lib
         self.size = 3 * structure.n_nodes
         self.negative_pivots: int | None = None
         """Number of negative eigenvalues of the factored matrix (``None`` when not computed)."""
@@ -630,20 +709,20 @@ class DissectionFactor:
         lib = self.lib
         for s in range(K):
             g = r[lo[s] : hi[s]]
-            U, Cp = self.chols[s], self.couplings[s]
+            U, Cp, k = self.chols[s], self.couplings[s], self.first_row[s]
             if U is not None:
                 lib.solve_upper_vector(U, g, transpose=True)
                 if Cp is not None:
-                    r[bd[s]] -= g @ Cp
+                    r[bd[s]] -= g[k:] @ Cp
             else:
                 if Cp is not None:
                     r[bd[s]] -= g @ Cp
                 g[...] = self.inverses[s] @ g
         for s in range(K - 1, -1, -1):
             g = r[lo[s] : hi[s]]
-            U, Cp = self.chols[s], self.couplings[s]
+            U, Cp, k = self.chols[s], self.couplings[s], self.first_row[s]
             if Cp is not None:
-                g -= Cp @ r[bd[s]]
+                g[k:] -= Cp @ r[bd[s]]
             if U is not None:
                 lib.solve_upper_vector(U, g)
         out = np.empty(self.size)
@@ -670,10 +749,10 @@ class DissectionFactor:
             Cp = self.couplings[s]
             if Cp is None:
                 continue
-            g = -(Cp @ w[st.boundary_dofs[s]])
+            g = w[3 * st.start[s] : 3 * st.stop[s]]
+            g[self.first_row[s] :] = -(Cp @ w[st.boundary_dofs[s]])
             if self.chols[s] is not None:
                 self.lib.solve_upper_vector(self.chols[s], g)
-            w[3 * st.start[s] : 3 * st.stop[s]] = g
         out = np.empty(self.size)
         out[st.order] = w
         return out

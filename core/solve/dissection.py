@@ -24,9 +24,10 @@ import numpy as np
 from . import lapack
 from .linalg import _csr
 
-LEAF_NODES = 32
-"""Default largest part (in nodes) that is not dissected further: one dense pivot of ≤ 3·32 unknowns. Measured on
-the CircularPleat-antiFacet fixture (1,600 nodes); see :class:`NestedDissection`."""
+LEAF_NODES = 16
+"""Default largest part (in nodes) that is not dissected further. Small, because :func:`_amalgamate` then merges
+what is cheaper as one pivot: the factorisation times of leaves of 8 to 32 nodes are within noise of each other on
+the CircularPleat-antiFacet and Carved_Cylinder fixtures (measured one thread)."""
 
 
 def _neighbours(front: np.ndarray, indptr: np.ndarray, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

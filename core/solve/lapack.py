@@ -2,9 +2,9 @@
 
 numpy has no triangular solve and no Cholesky update, and Blender ships numpy without scipy; but every numpy wheel
 for Linux and Windows (and the Intel macOS ones) bundles OpenBLAS with LAPACK and CBLAS exported. The block
-factorisation of :mod:`.linalg` uses four of its routines — ``potrf`` (Cholesky), ``trsm`` and ``trsv``
-(triangular solves) and ``syrk`` (``C − WᵀW``) — which need about a third of the flops of the per-block inverse and
-products of the numpy code (≈ 2.3 s³ instead of ≈ 6.7 s³ per block of s unknowns).
+factorisations of :mod:`.dissection` and :mod:`.linalg` use four of its routines — ``potrf`` (Cholesky), ``trsm``
+and ``trsv`` (triangular solves) and ``syrk`` (``C − WᵀW``) — which need about a third of the flops of the
+per-block inverse and products of the numpy code (≈ 2.3 s³ instead of ≈ 6.7 s³ per block of s unknowns).
 
 Two naming schemes are found: numpy 1.x's ``numpy.libs/libopenblas64_*`` (symbols ``cblas_dtrsm64_``,
 ``dpotrf_64_``) and numpy 2.x's ``numpy.libs/libscipy_openblas64_*`` (``scipy_cblas_dtrsm64_``, …). The ``64_``
@@ -15,7 +15,8 @@ Where no library or one of the routines is missing (a numpy on Accelerate or a s
 :func:`routines` returns ``None`` and the callers keep their numpy code. :data:`ENABLED` (or :func:`disabled`)
 forces that fallback, so the tests run both.
 
-Arrays are numpy's C-contiguous (row-major) ``float64``; the wrappers call CBLAS in row-major order and the Fortran
+Arrays are numpy's row-major ``float64``, C-contiguous or a block of rows and columns of such an array (the leading
+dimension is read from the strides); the wrappers call CBLAS in row-major order and the Fortran
 ``dpotrf`` on the transpose (a symmetric matrix is its own transpose: its lower factor in column-major order is the
 upper factor ``U``, ``S = Uᵀ U``, in row-major order). The variants are the fastest of OpenBLAS 0.3.23 on blocks of
 ~166 (measured one thread: ``dpotrf`` "L" 90–115 µs vs "U" 170–195 µs; ``trsm`` left/upper/transposed 200 µs vs

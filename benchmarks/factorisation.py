@@ -9,7 +9,8 @@ jittered, shifted by 1e-3 (a Gauss–Newton step). Each is factored with ``inert
 new interleaved, ``--repeats`` times each (CPU time,
 ``time.process_time``, one BLAS thread): medians, the flops of one factorisation with Cholesky pivots, the number of
 blocks or supernodes, the setup time (ordering and scatter indices) and the largest difference of the two solves.
-``--fold`` also times whole folds of CircularPleat-antiFacet at 100 % with either (iterations, CPU, energy).
+``--fold`` also times whole folds of CircularPleat-antiFacet at 100 % with either (iterations, CPU, energy, how far
+apart the two final states are), ``--fold-all`` those of every fixture at 60 and 100 %, old and new interleaved.
 
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python -m curved_fold.benchmarks.factorisation [--repeats N] [--fold]``.
 Not part of ``make bench`` (a minute or two); it prints markdown tables.
@@ -35,7 +36,7 @@ from curved_fold.core.solve import forces as F  # noqa: E402, N812
 from curved_fold.core.solve.dissection import NestedDissection  # noqa: E402
 from curved_fold.core.solve.linalg import BlockTridiagonal, single_threaded_blas  # noqa: E402
 from curved_fold.core.solve.newton import HessianAssembler, rigid_shift  # noqa: E402
-from curved_fold.core.solve.solver import Solver  # noqa: E402
+from curved_fold.core.solve.solver import Solver, rigid_rms  # noqa: E402
 
 FIXTURE_CASES = ("CircularPleat-antiFacet.svg", "Carved_Cylinder.svg", "Treble_Clef.svg", "Rotating_Star.svg")
 GRID_SIZES = (10, 20, 30, 40, 50, 60)
@@ -111,29 +112,49 @@ def compare(
     return row
 
 
-def fold(repeats: int) -> list[dict[str, Any]]:
-    """Whole folds of CircularPleat-antiFacet at 100 % with either factorisation."""
-    mesh = build_mesh(read_pattern(FIXTURES / "CircularPleat-antiFacet.svg"), mesh_type="ruling")
+def fold(repeats: int, names: tuple[str, ...] = ("CircularPleat-antiFacet.svg",), percents=(1.0,)) -> list[dict]:
+    """Whole folds (``Solver(mesh).solve(percent)``) with either factorisation, old and new interleaved."""
     rows = []
-    for kind, cls in KINDS:
-        cpu = []
-        for _ in range(repeats):
-            solver = Solver(mesh)
-            solver._assembler = HessianAssembler(solver.model, matrix_class=cls)  # the one it would make lazily
-            t = time.process_time()
-            result = solver.solve(1.0)
-            cpu.append(time.process_time() - t)
-        rows.append(
-            {
-                "kind": kind,
-                "iterations": result.iterations,
-                "factorisations": result.hessian_assemblies,
-                "cpu s": float(np.median(cpu)),
-                "per iteration ms": float(np.median(cpu)) / result.iterations * 1e3,
-                "energy": f"{result.energy:.12g}",
-            }
-        )
+    for name in names:
+        mesh = build_mesh(read_pattern(FIXTURES / name), mesh_type="ruling")
+        for percent in percents:
+            cpu: dict[str, list[float]] = {kind: [] for kind, _ in KINDS}
+            results = {}
+            for _ in range(repeats):
+                for kind, cls in KINDS:
+                    solver = Solver(mesh)
+                    solver._assembler = HessianAssembler(solver.model, matrix_class=cls)  # made lazily otherwise
+                    t = time.process_time()
+                    results[kind] = solver.solve(percent)
+                    cpu[kind].append(time.process_time() - t)
+            old, new = results["old"], results["new"]
+            rows.append(
+                {
+                    "case": f"{name} {percent:.0%}",
+                    "iterations": f"{old.iterations} → {new.iterations}",
+                    "cpu old": float(np.median(cpu["old"])),
+                    "cpu new": float(np.median(cpu["new"])),
+                    "per iteration": f"{np.median(cpu['old']) / old.iterations * 1e3:.1f} → "
+                    f"{np.median(cpu['new']) / new.iterations * 1e3:.1f}",
+                    "energy": f"{new.energy:.10g}",
+                    "energy difference": abs(new.energy - old.energy) / max(abs(old.energy), 1e-300),
+                    "positions": rigid_rms(old.positions, new.positions),
+                }
+            )
+            print(f"{rows[-1]['case']}: {rows[-1]}", flush=True)
     return rows
+
+
+FOLD_COLUMNS = [
+    ("fold", "case", "s"),
+    ("iterations old → new", "iterations", "s"),
+    ("CPU s old", "cpu old", ".2f"),
+    ("CPU s new", "cpu new", ".2f"),
+    ("ms per iteration old → new", "per iteration", "s"),
+    ("energy", "energy", "s"),
+    ("energy rel. difference", "energy difference", ".0e"),
+    ("positions apart (mm, rigid RMS)", "positions", ".0e"),
+]
 
 
 COLUMNS = [
@@ -159,6 +180,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=9)
     parser.add_argument("--fold", action="store_true", help="also time whole CircularPleat-antiFacet folds")
+    parser.add_argument("--fold-all", action="store_true", help="whole folds of every fixture at 60 and 100 %%")
     parser.add_argument("--fold-repeats", type=int, default=5)
     parser.add_argument("--grids", type=int, nargs="*", default=list(GRID_SIZES))
     args = parser.parse_args(argv)
@@ -172,21 +194,13 @@ def main(argv: list[str] | None = None) -> int:
         print(markdown_table(rows[-1:], COLUMNS).splitlines()[-1], flush=True)
     print()
     print(markdown_table(rows, COLUMNS))
-    if args.fold:
-        print()
-        print(
-            markdown_table(
-                fold(args.fold_repeats),
-                [
-                    ("factorisation", "kind", "s"),
-                    ("iterations", "iterations", "d"),
-                    ("factorisations", "factorisations", "d"),
-                    ("CPU s (median)", "cpu s", ".2f"),
-                    ("ms per iteration", "per iteration ms", ".1f"),
-                    ("energy", "energy", "s"),
-                ],
-            )
+    if args.fold or args.fold_all:
+        names = (
+            tuple(sorted(p.name for p in FIXTURES.glob("*.svg"))) if args.fold_all else ("CircularPleat-antiFacet.svg",)
         )
+        percents = (0.6, 1.0) if args.fold_all else (1.0,)
+        print()
+        print(markdown_table(fold(args.fold_repeats, names, percents), FOLD_COLUMNS))
     return 0
 
 

@@ -12,9 +12,11 @@ is a *supernode*, a set of nodes eliminated together as one dense pivot), the el
 the sparsity structure of the factor and every index map the numeric work needs. :meth:`NestedDissection.factor`
 is then a multifrontal block Cholesky over the tree: one dense pivot, one triangular solve and one rank update
 per supernode (LAPACK/BLAS through :mod:`.lapack`), the update passed to the parent supernode by an extend-add with
-a precomputed index. It has the interface of :class:`.linalg.BlockTridiagonal` (``scatter_index``, ``assemble``,
-``diagonal``, ``factor``; the factor's ``apply``, inertia and negative-curvature direction), so
-:class:`.newton.HessianAssembler` uses either.
+a precomputed index. Small supernodes are merged into their parents where a cost model of the measured kernel
+rates and overheads says one bigger dense pivot is cheaper (:func:`_amalgamate`), and the rows of a pivot that do
+not couple to its boundary are ordered first and skipped by the triangular solve and the rank update. It has the
+interface of :class:`.linalg.BlockTridiagonal` (``scatter_index``, ``assemble``, ``diagonal``, ``factor``; the
+factor's ``apply``, inertia and negative-curvature direction), so :class:`.newton.HessianAssembler` uses either.
 """
 
 from __future__ import annotations
@@ -105,7 +107,7 @@ def _along(
 
     A separator is a curve across the sheet; a child supernode's boundary is an arc of each ancestor separator it
     touches, so ordered along the curve it is one contiguous range of the parent's front, and the extend-add of
-    its update is a few dense slices (:meth:`NestedDissection._extend_slices`) instead of a scatter per entry.
+    its update is a few dense slices (:meth:`NestedDissection._extend_plan`) instead of a scatter per entry.
     ``dist`` is used as scratch and left at −1.
     """
     if len(sep) <= 2:
@@ -372,13 +374,14 @@ class NestedDissection:
       eliminated in the order ``self.node_order``, each supernode a contiguous range ``start[s]:stop[s]`` of it;
     * the boundary ``B_s`` of each supernode: the later-eliminated nodes its column block of the factor reaches,
       ``(neighbours of s ∪ boundaries of its children) \\ (s and earlier)``; they all lie in ancestors of ``s``;
+    * with ``amalgamate``, children merged into their parents where :func:`_amalgamate`'s cost model gains;
+    * within each supernode, the nodes whose rows of the coupling are zero first (:attr:`zero_rows`);
     * storage: per supernode its pivot block ``A_ss`` (``p × p``, ``p = 3|s|``, upper triangle) followed by its
       coupling ``A_sB`` (``p × b``, ``b = 3|B_s|``), row-major: the first two parts of its front (see
       :meth:`factor`), filled by one contiguous copy;
     * per child, how its update matrix is added into the parent's front (:meth:`_extend_plan`).
 
-    ``min_block``: the largest part (nodes) not dissected further (:data:`LEAF_NODES` by default). Larger leaves
-    mean fewer, bigger supernodes: fewer Python steps and better BLAS efficiency, more flops.
+    ``min_block``: the largest part (nodes) not dissected further (:data:`LEAF_NODES` by default).
     """
 
     def __init__(self, n_nodes: int, pairs: np.ndarray, min_block: int | None = None, amalgamate: bool = True):
@@ -448,10 +451,9 @@ class NestedDissection:
         The child's boundary dofs are in ascending elimination order, and so is the parent's front (its pivot, then
         its boundary), so the map of positions is increasing: the upper triangle lands in the parent's upper
         triangles (pivot ``S``, coupling ``C``, update ``E``), where the factorisation reads it. Returns
-        ``(before, after)``, the additions into ``S``/``C`` (made before the parent's pivot is factored) and into
-        ``E`` (made after its own update is written there), each either ``("slices", [(region, destination,
-        source), …])``, one dense slice addition per pair of contiguous runs of the map (row run ≤ column run; runs
-        split where the pivot ends), which is what separators ordered along themselves (:func:`_along`) give; or,
+        ``(pivot and coupling part, update part)``, each either ``("slices", [(region, destination, source), …])``,
+        one dense slice addition per pair of contiguous runs of the map (row run ≤ column run; runs split where the
+        pivot ends), which is what separators ordered along themselves (:func:`_along`) give; or,
         when the runs are so many that a scatter is cheaper, ``("flat", (source, destination))``: flat positions of
         the entries in the update and in the parent's work vector (pivot and coupling) or its update block.
         ``None`` for a child without boundary.

@@ -671,8 +671,9 @@ class NestedDissection:
                 raise np.linalg.LinAlgError(f"non-finite inverse of supernode {s}")
             inverses[s] = Sinv
             if b:
-                X = Sinv @ C
-                E -= C.T @ X
+                k = self._sizes[s][4]  # rows above k of C are zero
+                X = Sinv[:, k:] @ C[k:]
+                E -= C[k:].T @ X[k:]
                 push(s, E)
                 couplings[s] = X
         out = DissectionFactor(self, chols, inverses, couplings, first_row, lib)

@@ -325,16 +325,31 @@ def test_non_finite_and_singular_raise(backend, where):
 
 
 @pytest.mark.skipif(not HAS_OPENBLAS, reason="numpy's OpenBLAS not found")
-def test_gram_update_replaces_without_reading():
-    """``subtract_gram(..., replace=True)`` (syrk with β = 0) writes −WᵀW over whatever the output held, NaN too:
-    the factorisation leaves its update blocks uninitialised before it."""
+def test_wrappers_take_blocks_of_rows():
+    """The factorisation hands ``potrf``/``trsm``/``syrk``/``trsv`` blocks of bigger arrays (``S[k:, k:]``, ``C[k:]``):
+    the leading dimension comes from the strides, and a block whose rows are not contiguous is refused."""
     lib = lapack.routines()
     rng = np.random.default_rng(11)
-    for m, k in ((5, 3), (120, 40)):
-        w = rng.normal(size=(k, m))
-        c = np.full((m, m), np.nan)
-        lib.subtract_gram(c, w, replace=True)
-        np.testing.assert_allclose(np.triu(c), np.triu(-w.T @ w), rtol=0, atol=1e-12)
+    big = rng.normal(size=(12, 12))
+    big = big @ big.T + 12 * np.eye(12)
+    S = big[3:10, 3:10]  # rows of stride 12
+    U = np.array(S)
+    assert lib.cholesky(S)
+    np.testing.assert_allclose(np.triu(S), np.linalg.cholesky(U).T, rtol=0, atol=1e-12)
+    B = rng.normal(size=(7, 9))
+    W = np.zeros((7, 15))
+    W[:, 2:11] = B
+    lib.solve_upper_transposed(S, W[:, 2:11])
+    np.testing.assert_allclose(np.triu(S).T @ W[:, 2:11], B, atol=1e-12)
+    C = np.zeros((20, 20))
+    lib.subtract_gram(C[5:14, 5:14], W[:, 2:11])
+    np.testing.assert_allclose(np.triu(C[5:14, 5:14]), np.triu(-B.T @ np.linalg.inv(U) @ B), atol=1e-10)
+    x = rng.normal(size=7)
+    y = x.copy()
+    lib.solve_upper_vector(S, y)
+    np.testing.assert_allclose(np.triu(S) @ y, x, atol=1e-12)
+    with pytest.raises(ValueError):
+        lib.cholesky(big[::2, ::2])
 
 
 def test_backends_agree_on_a_real_fixture_hessian():

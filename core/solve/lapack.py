@@ -108,9 +108,8 @@ class OpenBLAS:
             raise ValueError(f"triangular solve with {U.shape} and {b.shape}")
         self._trsm(_ROW_MAJOR, _LEFT, _UPPER, _TRANS, _NON_UNIT, n, m, 1.0, U.ctypes.data, ldu, b.ctypes.data, ldb)
 
-    def subtract_gram(self, c: np.ndarray, w: np.ndarray, replace: bool = False) -> None:
-        """In place ``c ← c − wᵀ w`` on the upper triangle of ``c`` (m, m) for ``w`` (n, m) (``syrk``); with
-        ``replace``, ``c ← −wᵀ w`` (``c`` is not read: it may hold anything, even NaN).
+    def subtract_gram(self, c: np.ndarray, w: np.ndarray) -> None:
+        """In place ``c ← c − wᵀ w`` on the upper triangle of ``c`` (m, m) for ``w`` (n, m) (``syrk``).
 
         The strict lower triangle of ``c`` is not updated.
         """
@@ -118,8 +117,7 @@ class OpenBLAS:
         n, m = w.shape
         if c.shape != (m, m):
             raise ValueError(f"rank update of {c.shape} by {w.shape}")
-        beta = 0.0 if replace else 1.0
-        self._syrk(_ROW_MAJOR, _UPPER, _TRANS, m, n, -1.0, w.ctypes.data, ldw, beta, c.ctypes.data, ldc)
+        self._syrk(_ROW_MAJOR, _UPPER, _TRANS, m, n, -1.0, w.ctypes.data, ldw, 1.0, c.ctypes.data, ldc)
 
     def solve_upper_vector(self, U: np.ndarray, x: np.ndarray, transpose: bool = False) -> None:
         """In place ``x ← U⁻¹ x`` (or ``U⁻ᵀ x``) for the upper triangle ``U`` (n, n) and a vector ``x`` (``trsv``)."""

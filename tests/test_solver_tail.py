@@ -18,18 +18,8 @@ from tests.test_forces import grid_mesh
 
 
 def dense(assembler: HessianAssembler, storage: np.ndarray) -> np.ndarray:
-    """The symmetric matrix held in block-tridiagonal ``storage`` as a dense array (natural dof order)."""
-    m = assembler.matrix
-    n = 3 * m.n_nodes
-    out = np.zeros((n, n))
-    for k, s in enumerate(m.sizes):
-        d = storage[m.diag_offset[k] : m.diag_offset[k] + s * s].reshape(s, s)
-        out[np.ix_(m.dofs[k], m.dofs[k])] += 0.5 * (d + d.T)
-        if k + 1 < len(m.sizes):
-            b = storage[m.sub_offset[k] : m.sub_offset[k] + m.sizes[k + 1] * s].reshape(m.sizes[k + 1], s)
-            out[np.ix_(m.dofs[k + 1], m.dofs[k])] += b
-            out[np.ix_(m.dofs[k], m.dofs[k + 1])] += b.T
-    return out
+    """The symmetric matrix held in the assembler's ``storage`` as a dense array (natural dof order)."""
+    return assembler.matrix.dense(storage)
 
 
 def finite_difference_hessian(model, x, theta, percent, eps=1e-6):

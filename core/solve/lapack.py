@@ -2,9 +2,9 @@
 
 numpy has no triangular solve and no Cholesky update, and Blender ships numpy without scipy; but every numpy wheel
 for Linux and Windows (and the Intel macOS ones) bundles OpenBLAS with LAPACK and CBLAS exported. The block
-factorisation of :mod:`.linalg` uses four of its routines — ``potrf`` (Cholesky), ``trsm`` and ``trsv``
-(triangular solves) and ``syrk`` (``C − WᵀW``) — which need about a third of the flops of the per-block inverse and
-products of the numpy code (≈ 2.3 s³ instead of ≈ 6.7 s³ per block of s unknowns).
+factorisations of :mod:`.dissection` and :mod:`.linalg` use four of its routines — ``potrf`` (Cholesky), ``trsm``
+and ``trsv`` (triangular solves) and ``syrk`` (``C − WᵀW``) — which need about a third of the flops of the
+per-block inverse and products of the numpy code (≈ 2.3 s³ instead of ≈ 6.7 s³ per block of s unknowns).
 
 Two naming schemes are found: numpy 1.x's ``numpy.libs/libopenblas64_*`` (symbols ``cblas_dtrsm64_``,
 ``dpotrf_64_``) and numpy 2.x's ``numpy.libs/libscipy_openblas64_*`` (``scipy_cblas_dtrsm64_``, …). The ``64_``
@@ -15,7 +15,8 @@ Where no library or one of the routines is missing (a numpy on Accelerate or a s
 :func:`routines` returns ``None`` and the callers keep their numpy code. :data:`ENABLED` (or :func:`disabled`)
 forces that fallback, so the tests run both.
 
-Arrays are numpy's C-contiguous (row-major) ``float64``; the wrappers call CBLAS in row-major order and the Fortran
+Arrays are numpy's row-major ``float64``, C-contiguous or a block of rows and columns of such an array (the leading
+dimension is read from the strides); the wrappers call CBLAS in row-major order and the Fortran
 ``dpotrf`` on the transpose (a symmetric matrix is its own transpose: its lower factor in column-major order is the
 upper factor ``U``, ``S = Uᵀ U``, in row-major order). The variants are the fastest of OpenBLAS 0.3.23 on blocks of
 ~166 (measured one thread: ``dpotrf`` "L" 90–115 µs vs "U" 170–195 µs; ``trsm`` left/upper/transposed 200 µs vs
@@ -87,53 +88,63 @@ class OpenBLAS:
         Returns ``False`` when ``a`` is not positive definite (LAPACK ``info > 0``; ``a`` is then partly
         overwritten). The strict lower triangle is left as it was.
         """
-        _check(a, 2)
+        lda = _check(a, 2)
         n = a.shape[0]
         if a.shape[1] != n:
             raise ValueError(f"cholesky of a non-square {a.shape} matrix")
-        size, info = self._int(n), self._int(0)
+        size, ld, info = self._int(n), self._int(lda), self._int(0)
         # the column-major view of the row-major array is its transpose: LAPACK's lower factor L there is U = Lᵀ
         # here (OpenBLAS's "L" variant is about twice as fast as its "U" on blocks of ~160)
-        self._potrf(b"L", ctypes.byref(size), a.ctypes.data, ctypes.byref(size), ctypes.byref(info), 1)
+        self._potrf(b"L", ctypes.byref(size), a.ctypes.data, ctypes.byref(ld), ctypes.byref(info), 1)
         if info.value < 0:
             raise ValueError(f"dpotrf: illegal argument {-info.value}")
         return info.value == 0
 
     def solve_upper_transposed(self, U: np.ndarray, b: np.ndarray) -> None:
         """In place ``b ← U⁻ᵀ b`` for the upper triangle ``U`` (n, n) and ``b`` (n, m) (``trsm``)."""
-        _check(U, 2)
-        _check(b, 2)
+        ldu, ldb = _check(U, 2), _check(b, 2)
         n, m = b.shape
         if U.shape != (n, n):
             raise ValueError(f"triangular solve with {U.shape} and {b.shape}")
-        self._trsm(_ROW_MAJOR, _LEFT, _UPPER, _TRANS, _NON_UNIT, n, m, 1.0, U.ctypes.data, n, b.ctypes.data, m)
+        self._trsm(_ROW_MAJOR, _LEFT, _UPPER, _TRANS, _NON_UNIT, n, m, 1.0, U.ctypes.data, ldu, b.ctypes.data, ldb)
 
     def subtract_gram(self, c: np.ndarray, w: np.ndarray) -> None:
         """In place ``c ← c − wᵀ w`` on the upper triangle of ``c`` (m, m) for ``w`` (n, m) (``syrk``).
 
         The strict lower triangle of ``c`` is not updated.
         """
-        _check(c, 2)
-        _check(w, 2)
+        ldc, ldw = _check(c, 2), _check(w, 2)
         n, m = w.shape
         if c.shape != (m, m):
             raise ValueError(f"rank update of {c.shape} by {w.shape}")
-        self._syrk(_ROW_MAJOR, _UPPER, _TRANS, m, n, -1.0, w.ctypes.data, m, 1.0, c.ctypes.data, m)
+        self._syrk(_ROW_MAJOR, _UPPER, _TRANS, m, n, -1.0, w.ctypes.data, ldw, 1.0, c.ctypes.data, ldc)
 
     def solve_upper_vector(self, U: np.ndarray, x: np.ndarray, transpose: bool = False) -> None:
         """In place ``x ← U⁻¹ x`` (or ``U⁻ᵀ x``) for the upper triangle ``U`` (n, n) and a vector ``x`` (``trsv``)."""
-        _check(U, 2)
+        ldu = _check(U, 2)
         _check(x, 1)
         n = x.shape[0]
         if U.shape != (n, n):
             raise ValueError(f"triangular solve with {U.shape} and {x.shape}")
         trans = _TRANS if transpose else _NO_TRANS
-        self._trsv(_ROW_MAJOR, _UPPER, trans, _NON_UNIT, n, U.ctypes.data, n, x.ctypes.data, 1)
+        self._trsv(_ROW_MAJOR, _UPPER, trans, _NON_UNIT, n, U.ctypes.data, ldu, x.ctypes.data, 1)
 
 
-def _check(a: np.ndarray, ndim: int) -> None:
-    if a.dtype != np.float64 or a.ndim != ndim or not a.flags.c_contiguous:
-        raise ValueError(f"expected a C-contiguous float64 array of {ndim} dimensions, got {a.dtype} {a.shape}")
+def _check(a: np.ndarray, ndim: int) -> int:
+    """Raise unless ``a`` is ``float64`` with ``ndim`` dimensions whose rows are contiguous (a C-contiguous array,
+    or a block of rows and columns of one: ``a[i:j, k:l]``); returns its leading dimension (row stride in
+    elements), what BLAS calls ``lda``."""
+    if a.dtype != np.float64 or a.ndim != ndim:
+        raise ValueError(f"expected a float64 array of {ndim} dimensions, got {a.dtype} {a.shape}")
+    if ndim == 1 or a.shape[0] <= 1:
+        if not a.flags.c_contiguous:
+            raise ValueError(f"expected a contiguous array, got strides {a.strides}")
+        return max(a.shape[-1], 1)
+    item = a.itemsize
+    row, col = a.strides
+    if (col != item and a.shape[1] > 1) or row % item or row < item * max(a.shape[1], 1):
+        raise ValueError(f"expected rows of contiguous float64, got shape {a.shape} strides {a.strides}")
+    return row // item
 
 
 def _candidates() -> list[str]:

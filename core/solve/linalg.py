@@ -172,6 +172,21 @@ class BlockTridiagonal:
             out[self.dofs[k]] = np.diag(d)
         return out
 
+    def dense(self, storage: np.ndarray) -> np.ndarray:
+        """The symmetric matrix held in ``storage`` as a dense array, natural dof order (tests and checks)."""
+        n = 3 * self.n_nodes
+        out = np.zeros((n, n))
+        for k, s in enumerate(self.sizes):
+            d = storage[self.diag_offset[k] : self.diag_offset[k] + s * s].reshape(s, s)
+            out[np.ix_(self.dofs[k], self.dofs[k])] += 0.5 * (d + d.T)
+            if k + 1 < len(self.sizes):
+                b = storage[self.sub_offset[k] : self.sub_offset[k] + self.sizes[k + 1] * s].reshape(
+                    self.sizes[k + 1], s
+                )
+                out[np.ix_(self.dofs[k + 1], self.dofs[k])] += b
+                out[np.ix_(self.dofs[k], self.dofs[k + 1])] += b.T
+        return out
+
     def factor(
         self,
         storage: np.ndarray,

@@ -7,7 +7,8 @@ dynamics towards it. Each iteration:
 2. assembles a positive semi-definite Gauss–Newton Hessian: bar blocks ``k (d̂d̂ᵀ + max(0, 1 − L0/ℓ)(I − d̂d̂ᵀ))``
    (the geometric term is kept where it is positive), ``k ∇θ ∇θᵀ`` per hinge, ``k_f ∇α ∇αᵀ`` per face corner;
 3. solves ``(H + λ I) p = F`` (``λ`` is the Levenberg–Marquardt damping, which also removes the six rigid-body null
-   modes) directly, with a fresh block-tridiagonal factorisation (``core.solve.linalg``). Conjugate gradients
+   modes) directly, with a fresh sparse factorisation (nested dissection and multifrontal Cholesky,
+   ``core.solve.dissection``; the block-tridiagonal one of ``core.solve.linalg`` before it). Conjugate gradients
    preconditioned by an *earlier* factorisation did this before; once the factorisation went through LAPACK
    (``core.solve.lapack``, ~3× cheaper) the exact Gauss–Newton step won: one iteration per animation frame instead of
    two (a CG step solved to 1e-2 leaves the residual at ~1e-4), 40 → 27 ms CPU per frame at 2,048 faces;
@@ -33,8 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import run_to_end
+from .dissection import DissectionFactor, NestedDissection
 from .forces import Evaluation, evaluate, exact_hessian_blocks
-from .linalg import BlockFactor, BlockTridiagonal
 from .model import BarHingeModel
 
 MAX_STEP = 0.25
@@ -80,14 +81,21 @@ blocks and a factorisation for nothing (the Gauss–Newton step is taken instead
 
 
 class HessianAssembler:
-    """Scatter indices of every element block into block-tridiagonal storage, computed once per model."""
+    """Scatter indices of every element block into the storage of the sparse factorisation, computed once per model.
 
-    def __init__(self, model: BarHingeModel, min_block: int = 24):
+    ``matrix_class`` is the storage and factorisation: :class:`.dissection.NestedDissection` (nested dissection,
+    multifrontal Cholesky) by default; :class:`.linalg.BlockTridiagonal`, the level-set band it replaced, has the
+    same interface (the benchmarks compare them). ``min_block`` is passed on (``None``: the class's default).
+    """
+
+    def __init__(self, model: BarHingeModel, min_block: int | None = None, matrix_class: type | None = None):
         self.model = model
         tri = model.triangles
         wings = model.hinge_wings
         pairs = np.concatenate([model.bar_nodes, tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [0, 2]], wings])
-        self.matrix = BlockTridiagonal(model.n_nodes, pairs, min_block)
+        matrix_class = NestedDissection if matrix_class is None else matrix_class
+        options = {} if min_block is None else {"min_block": min_block}
+        self.matrix = matrix_class(model.n_nodes, pairs, **options)
         i, j = model.bar_nodes[:, 0], model.bar_nodes[:, 1]
         self.bar_index = self.matrix.scatter_index(np.concatenate([i, j, i, j]), np.concatenate([i, j, j, i]))
         hn = np.column_stack([wings, model.hinge_edge_nodes])  # (h, 4): w1, w2, v1, v2
@@ -484,7 +492,7 @@ def _leave_saddle(
 
 def _saddle_step(
     model: BarHingeModel,
-    factor: BlockFactor,
+    factor: DissectionFactor,
     x: np.ndarray,
     ev: Evaluation,
     percent: float,
@@ -533,7 +541,7 @@ def branch_chooser(n_nodes: int) -> np.ndarray:
 
 def _geodesic_acceleration(
     model: BarHingeModel,
-    factor: BlockFactor,
+    factor: DissectionFactor,
     x: np.ndarray,
     ev: Evaluation,
     p: np.ndarray,

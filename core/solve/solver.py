@@ -2,7 +2,7 @@
 
 Methods (all minimise/settle the same energy, ``core.solve.forces``):
 
-* ``"fast"`` — damped Gauss–Newton with a numpy-only block-tridiagonal linear solver (``core.solve.newton``);
+* ``"fast"`` — damped Gauss–Newton with a numpy-only sparse Cholesky (nested dissection, ``core.solve.newton``);
 * ``"faithful"`` — Origami Simulator's explicit damped dynamics (``core.solve.faithful``), run until the residual
   criterion holds or the step/time cap is hit;
 * ``"isometric"`` — the fast solver with bars ``isometric_factor`` (1000×) stiffer, so the sheet barely stretches.

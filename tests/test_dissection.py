@@ -184,6 +184,33 @@ def test_definite_only_stops_at_the_first_indefinite_pivot(backend):
     np.testing.assert_array_equal(spd.apply(rhs), nd.factor(storage, definite, inertia=True).apply(rhs))
 
 
+def test_negative_subspace_direction_combines_every_negative_mode(backend):
+    """``negative_subspace_direction``: ``w = L⁻ᵀ z`` with ``z`` every negative pivot eigenvector, weighted
+    ``λ/λ_min`` and signed by the chooser: ``wᵀ A w = Σ c² λ`` (exact, by congruence), more negative than the one
+    lowest mode's ``λ_min``; the eigenvectors' own signs do not matter."""
+    model = build_model(grid_mesh(8, 8, 80.0))
+    pairs = model_pairs(model)
+    n = model.n_nodes
+    rows, cols, blocks, A = random_matrix(n, pairs, seed=3)
+    lam = np.linalg.eigvalsh(A)
+    nd = NestedDissection(n, pairs, 6, amalgamate=False)
+    storage = storage_of(nd, rows, cols, blocks)
+    shift = -lam[0] - 0.3 * (lam[-1] - lam[0])
+    M = A + shift * np.eye(3 * n)
+    factor = nd.factor(storage, shift, inertia=True)
+    assert sum(len(vals) for _, vals, _ in factor.negative_pairs) == factor.negative_pivots > 1
+    assert len({k for k, _, _ in factor.negative_pairs}) > 1  # negative pivots in several supernodes
+    chooser = np.cos(np.arange(3 * n) * 2.4 + 0.5)
+    w = factor.negative_subspace_direction(chooser)
+    lowest = factor.lowest_pivot[0]
+    expected = sum(float(np.sum((vals / lowest) ** 2 * vals)) for _, vals, _ in factor.negative_pairs)
+    assert w @ M @ w == pytest.approx(expected, rel=1e-9)
+    assert expected < lowest < 0
+    factor.negative_pairs = [(k, vals, -vecs) for k, vals, vecs in factor.negative_pairs]
+    np.testing.assert_allclose(factor.negative_subspace_direction(chooser), w, rtol=0, atol=1e-12 * np.abs(w).max())
+    assert nd.factor(storage, -lam[0] + 1.0, inertia=True).negative_subspace_direction(chooser) is None
+
+
 def test_negative_direction_back_substitutes_through_the_subtree(backend):
     """A single negative pivot placed on an inner separator (not a leaf, not the root): its direction is nonzero
     on descendants (the back substitution through ``X_s`` reaches them), and ``wᵀ A w`` is its eigenvalue."""

@@ -614,6 +614,7 @@ class NestedDissection:
         fronts: list[tuple | None] = [None] * K
         negative = 0
         lowest: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
+        negatives: list[tuple[int, np.ndarray, np.ndarray]] = []
 
         def front(s: int) -> tuple:
             """The front of ``s``: work vector (pivot ``S`` and coupling ``C``) assembled from the storage and the
@@ -687,6 +688,8 @@ class NestedDissection:
                     return stopped()
                 w, v = np.linalg.eigh(Sf)
                 negative += int(np.sum(w < 0))
+                if w[0] < 0:
+                    negatives.append((s, w[w < 0], v[:, w < 0]))
                 if w[0] < lowest[0]:
                     lowest = (float(w[0]), s, v[:, 0])
             Sinv = np.linalg.inv(Sf)
@@ -702,6 +705,7 @@ class NestedDissection:
         out = DissectionFactor(self, chols, inverses, couplings, first_row, lib)
         out.negative_pivots = negative if inertia else None
         out.lowest_pivot = lowest
+        out.negative_pairs = negatives
         return out
 
     def solve(self, storage: np.ndarray, rhs: np.ndarray, shift: np.ndarray | float = 0.0) -> np.ndarray:
@@ -727,6 +731,8 @@ class DissectionFactor:
         """Number of negative eigenvalues of the factored matrix (``None`` when not computed)."""
         self.lowest_pivot: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
         """``(eigenvalue, supernode, eigenvector)`` of the most negative pivot eigenvalue found (−1: none)."""
+        self.negative_pairs: list[tuple[int, np.ndarray, np.ndarray]] = []
+        """Every negative eigenpair of the pivots: ``(supernode, eigenvalues, eigenvectors as columns)``."""
         self.complete = True
         """False for a factorisation stopped at its first indefinite pivot (``definite_only``): it cannot solve."""
 
@@ -763,6 +769,32 @@ class DissectionFactor:
                 lib.solve_upper_vector(U, g)
         out = np.empty(self.size)
         out[st.order] = r
+        return out
+
+    def negative_subspace_direction(self, chooser: np.ndarray) -> np.ndarray | None:
+        """``w = L⁻ᵀ z`` with ``z`` a combination of every negative eigenvector of every pivot, each with the sign
+        ``chooser`` (natural dof order) gives it and weight ``λ / λ_min``: ``wᵀ A w = Σ c² λ < 0``, along all the
+        unstable modes at once."""
+        if not self.negative_pairs:
+            return None
+        st = self.structure
+        ch = np.asarray(chooser, dtype=np.float64)[st.order]
+        w = np.zeros(self.size)
+        lowest = min(float(vals[0]) for _, vals, _ in self.negative_pairs)
+        for s, vals, vecs in self.negative_pairs:
+            part = ch[3 * st.start[s] : 3 * st.stop[s]] @ vecs
+            w[3 * st.start[s] : 3 * st.stop[s]] += vecs @ (np.where(part < 0, -1.0, 1.0) * vals / lowest)
+        top = max(s for s, _, _ in self.negative_pairs)
+        for s in range(top - 1, -1, -1):
+            Cp = self.couplings[s]
+            if Cp is None:
+                continue
+            g = w[3 * st.start[s] : 3 * st.stop[s]]
+            g[self.first_row[s] :] -= Cp @ w[st.boundary_dofs[s]]
+            if self.chols[s] is not None:
+                self.lib.solve_upper_vector(self.chols[s], g)
+        out = np.empty(self.size)
+        out[st.order] = w
         return out
 
     def negative_direction(self) -> np.ndarray | None:

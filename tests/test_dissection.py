@@ -128,17 +128,23 @@ def test_solves_equal_dense_solves_on_real_mesh_couplings(backend, mesh):
     assert len(NestedDissection(n, pairs, 4, amalgamate=False).supernodes) > 10  # really dissected
 
 
-def test_inertia_and_negative_direction_on_indefinite_matrices(backend):
-    """Indefinite matrices (negative pivots in leaves, in inner separators and at the root): the count of negative
-    pivots is the count of negative eigenvalues (Sylvester), and ``w = L⁻ᵀ z`` has ``wᵀ A w`` = the lowest pivot
-    eigenvalue, reaching into the subtree of that pivot's supernode and nowhere else."""
+def indefinite_grid():
+    """A random symmetric matrix with the couplings of an 8×8 grid's model and its dissection (leaves of 6 nodes,
+    not merged): ``(n, nd, storage, A, eigenvalues of A)``; shifted below its middle it has negative pivots in
+    leaves, inner separators and the root."""
     model = build_model(grid_mesh(8, 8, 80.0))
     pairs = model_pairs(model)
     n = model.n_nodes
     rows, cols, blocks, A = random_matrix(n, pairs, seed=3)
-    lam = np.linalg.eigvalsh(A)
     nd = NestedDissection(n, pairs, 6, amalgamate=False)
-    storage = storage_of(nd, rows, cols, blocks)
+    return n, nd, storage_of(nd, rows, cols, blocks), A, np.linalg.eigvalsh(A)
+
+
+def test_inertia_and_negative_direction_on_indefinite_matrices(backend):
+    """Indefinite matrices (negative pivots in leaves, in inner separators and at the root): the count of negative
+    pivots is the count of negative eigenvalues (Sylvester), and ``w = L⁻ᵀ z`` has ``wᵀ A w`` = the lowest pivot
+    eigenvalue, reaching into the subtree of that pivot's supernode and nowhere else."""
+    n, nd, storage, A, lam = indefinite_grid()
     for shift in (-lam[0] - 0.3 * (lam[-1] - lam[0]), -lam[0] - 0.03 * (lam[-1] - lam[0]), 0.0):
         M = A + shift * np.eye(3 * n)
         negatives = int(np.sum(np.linalg.eigvalsh(M) < 0))
@@ -163,13 +169,7 @@ def test_inertia_and_negative_direction_on_indefinite_matrices(backend):
 def test_definite_only_stops_at_the_first_indefinite_pivot(backend):
     """``definite_only``: an indefinite matrix is reported (≥ 1 negative pivot, incomplete) without finishing the
     elimination; a positive definite one is factored exactly as without it."""
-    model = build_model(grid_mesh(8, 8, 80.0))
-    pairs = model_pairs(model)
-    n = model.n_nodes
-    rows, cols, blocks, A = random_matrix(n, pairs, seed=3)
-    lam = np.linalg.eigvalsh(A)
-    nd = NestedDissection(n, pairs, 6, amalgamate=False)
-    storage = storage_of(nd, rows, cols, blocks)
+    n, nd, storage, A, lam = indefinite_grid()
     indefinite = -lam[0] - 0.3 * (lam[-1] - lam[0])
     assert nd.factor(storage, indefinite, inertia=True).negative_pivots > 1
     stopped = nd.factor(storage, indefinite, inertia=True, definite_only=True)
@@ -188,13 +188,7 @@ def test_negative_subspace_direction_combines_every_negative_mode(backend):
     """``negative_subspace_direction``: ``w = L⁻ᵀ z`` with ``z`` every negative pivot eigenvector, weighted
     ``λ/λ_min`` and signed by the chooser: ``wᵀ A w = Σ c² λ`` (exact, by congruence), more negative than the one
     lowest mode's ``λ_min``; the eigenvectors' own signs do not matter."""
-    model = build_model(grid_mesh(8, 8, 80.0))
-    pairs = model_pairs(model)
-    n = model.n_nodes
-    rows, cols, blocks, A = random_matrix(n, pairs, seed=3)
-    lam = np.linalg.eigvalsh(A)
-    nd = NestedDissection(n, pairs, 6, amalgamate=False)
-    storage = storage_of(nd, rows, cols, blocks)
+    n, nd, storage, A, lam = indefinite_grid()
     shift = -lam[0] - 0.3 * (lam[-1] - lam[0])
     M = A + shift * np.eye(3 * n)
     factor = nd.factor(storage, shift, inertia=True)

@@ -353,8 +353,10 @@ def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None, 
 
     method = engine_id(method)
     solver = Solver(mesh, settings, method, constraints)
-    if method != "faithful":
-        solver.assembler  # noqa: B018 - the Hessian ordering: part of this unit, not the first iteration
+    if method != "faithful":  # the Hessian's ordering and structure, in units of their own
+        preparing = solver.prepare_steps()
+        for _ in preparing:
+            yield jobs.Progress("model")
     yield jobs.Progress("solve")
     result = yield from solve_progress(solver, percent, start=start)
     report = make_report(

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -197,3 +199,21 @@ def test_solve_steps_yields_each_iteration_and_equals_solve():
     assert seen[-1].residual == pytest.approx(sliced.residual)
     np.testing.assert_array_equal(sliced.positions, whole.positions)
     assert sliced.converged and sliced.iterations == whole.iterations
+
+
+def test_the_hessian_structure_is_prepared_in_two_units_and_gives_the_same_fold():
+    """``Solver.prepare_steps`` (a Blender job's "model" units): one yield between the nested dissection and the
+    rest; the assembler it leaves is the one :attr:`Solver.assembler` makes, and a fold with it is bit-identical."""
+    mesh = bisector_mesh()[1]
+    solver = Solver(mesh)
+    steps = solver.prepare_steps()
+    assert list(itertools.islice(steps, 1)) == ["ordering"]
+    with pytest.raises(StopIteration) as done:
+        next(steps)
+    prepared = done.value.value
+    assert prepared is solver.assembler  # kept, not made again
+    assert list(solver.prepare_steps()) == []  # nothing left to do
+    plain = Solver(mesh).assembler
+    assert prepared.matrix.storage_size == plain.matrix.storage_size
+    np.testing.assert_array_equal(prepared.work["index"], plain.work["index"])
+    np.testing.assert_array_equal(solver.solve(0.8).positions, Solver(mesh).solve(0.8).positions)

@@ -88,14 +88,21 @@ class HessianAssembler:
     same interface (the benchmarks compare them). ``min_block`` is passed on (``None``: the class's default).
     """
 
-    def __init__(self, model: BarHingeModel, min_block: int | None = None, matrix_class: type | None = None):
+    def __init__(
+        self,
+        model: BarHingeModel,
+        min_block: int | None = None,
+        matrix_class: type | None = None,
+        matrix: NestedDissection | None = None,
+    ):
         self.model = model
         tri = model.triangles
         wings = model.hinge_wings
-        pairs = np.concatenate([model.bar_nodes, tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [0, 2]], wings])
-        matrix_class = NestedDissection if matrix_class is None else matrix_class
-        options = {} if min_block is None else {"min_block": min_block}
-        self.matrix = matrix_class(model.n_nodes, pairs, **options)
+        if matrix is None:
+            matrix_class = NestedDissection if matrix_class is None else matrix_class
+            options = {} if min_block is None else {"min_block": min_block}
+            matrix = matrix_class(model.n_nodes, self.coupling_pairs(model), **options)
+        self.matrix = matrix
         i, j = model.bar_nodes[:, 0], model.bar_nodes[:, 1]
         self.bar_index = self.matrix.scatter_index(np.concatenate([i, j, i, j]), np.concatenate([i, j, j, i]))
         hn = np.column_stack([wings, model.hinge_edge_nodes])  # (h, 4): w1, w2, v1, v2
@@ -119,6 +126,12 @@ class HessianAssembler:
             "hinge out": values[36 * nb : 36 * nb + 144 * nh].reshape(nh, 12, 12),
             "face out": values[36 * nb + 144 * nh :].reshape(nf, 9, 9),
         }
+
+    @staticmethod
+    def coupling_pairs(model: BarHingeModel) -> np.ndarray:
+        """Node pairs the Hessian couples: bars, triangle sides and each hinge's two wing nodes."""
+        tri = model.triangles
+        return np.concatenate([model.bar_nodes, tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [0, 2]], model.hinge_wings])
 
     def _bars_into(self, values: np.ndarray, bars: np.ndarray) -> None:
         """Bar blocks ``K`` as the four node blocks ``K, K, −K, −K`` (ii, jj, ij, ji) at the head of ``values``."""

@@ -24,6 +24,7 @@ from .. import run_to_end
 from ..mesh.fold_mesh import FoldMesh
 from ..pattern.model import PatternError
 from .constraints import GLUE_STIFFNESS, Constraints
+from .dissection import NestedDissection, dissect_pairs
 from .faithful import SolverError, faithful_solve, time_step
 from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
@@ -164,8 +165,19 @@ class Solver:
 
     @property
     def assembler(self) -> HessianAssembler:
+        """The Hessian's storage and factorisation (nested-dissection ordering, scatter indices), made once."""
+        return run_to_end(self.prepare_steps())
+
+    def prepare_steps(self) -> Generator[str, None, HessianAssembler]:
+        """Make :attr:`assembler` in two units for a Blender job: the nested dissection of the coupling graph
+        (~95 ms at 3,000 faces), then the factorisation's structure and the scatter indices (~60 ms); yields
+        between them, returns the assembler (at once if it exists)."""
         if self._assembler is None:
-            self._assembler = HessianAssembler(self.model)
+            pairs = HessianAssembler.coupling_pairs(self.model)
+            dissection = dissect_pairs(self.model.n_nodes, pairs)
+            yield "ordering"
+            matrix = NestedDissection(self.model.n_nodes, pairs, dissection=dissection)
+            self._assembler = HessianAssembler(self.model, matrix=matrix)
         return self._assembler
 
     @property

@@ -57,12 +57,18 @@ def measure(mesh: FoldMesh, result: FoldResult, percent: float) -> dict[str, Any
     return out
 
 
-def self_intersecting_faces(mesh: FoldMesh, positions: np.ndarray) -> int | None:
-    """Triangles passing through a non-adjacent triangle (``core.metrics.intersections``); None if not finite."""
+def self_intersecting_faces(mesh: FoldMesh, positions: np.ndarray, crossing: np.ndarray | None = None) -> int | None:
+    """Triangles passing through a non-adjacent triangle (``core.metrics.intersections``); None if not finite.
+    ``crossing``: the per-triangle mask if the caller already has it (a Blender job measures it in a unit of its
+    own and colours the faces with it)."""
     from .metrics.intersections import count_intersecting_faces
 
     positions = np.asarray(positions, dtype=np.float64)
-    return count_intersecting_faces(positions, mesh.triangles) if np.all(np.isfinite(positions)) else None
+    if not np.all(np.isfinite(positions)):
+        return None
+    if crossing is not None:
+        return int(np.count_nonzero(crossing))
+    return count_intersecting_faces(positions, mesh.triangles)
 
 
 def state_report(result: FoldResult) -> dict[str, Any]:
@@ -95,8 +101,10 @@ def make_report(
     warnings: list[str],
     constraints: Constraints | None = None,
     start: np.ndarray | None = None,
+    crossing: np.ndarray | None = None,
 ) -> dict[str, Any]:
-    """The JSON-ready report of one solve: sizes, timings, solver counts, metrics and the Fig. 7 verdict."""
+    """The JSON-ready report of one solve: sizes, timings, solver counts, metrics and the Fig. 7 verdict
+    (``crossing``: the self-intersection mask per triangle, when already measured)."""
     report: dict[str, Any] = {
         "vertices": int(mesh.n_vertices),
         "faces": int(mesh.n_faces),
@@ -121,7 +129,7 @@ def make_report(
     }
     # metrics.summary also reports mesh counts (as floats): keep the report's own integer counts
     report.update({k: v for k, v in measure(mesh, result, percent).items() if k not in report})
-    report["self_intersecting_faces"] = self_intersecting_faces(mesh, result.positions)
+    report["self_intersecting_faces"] = self_intersecting_faces(mesh, result.positions, crossing)
     if constraints is not None and not constraints.empty:
         report.update(constraints.report(mesh, result.positions, start))
     report.update(verdict(mesh, result.fold_angles, percent))  # paper Fig. 7: creases that stay flat or fold wrong

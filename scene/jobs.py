@@ -42,7 +42,7 @@ class JobBusyError(RuntimeError):
 
 @dataclass
 class Progress:
-    """Where a job is: its ``stage`` ("start", "discretise", "mesh", "model", "solve", "frame"), the solver
+    """Where a job is: its ``stage`` ("start", "discretise", "mesh", "model", "solve", "figures", "frame"), the solver
     iteration and residual, the frame k of n (bakes), the fraction done, and positions (mm) worth showing (or
     None)."""
 
@@ -64,6 +64,8 @@ class Progress:
             return "meshing the pattern"
         if self.stage == "model":
             return "building the bar-and-hinge model"
+        if self.stage == "figures":
+            return "measuring the fold (strain, warp, self-intersection)"
         if self.stage == "frame" and self.n_frames:
             left = ""
             if self.fraction > 0 and elapsed_s > 0:
@@ -235,8 +237,8 @@ class Job:
         self.longest_slice_ms = 0.0
         self.unit_ms: dict[str, float] = {}
         """Longest unit of work per stage ("start" is the first unit: reading the curves for a fold or a rebuild,
-        "discretise" a step of their discretisation, "mesh" the triangulation, "model" the bar-and-hinge model,
-        "solve" a solver iteration)."""
+        "discretise" a step of their discretisation, "mesh" the triangulation, "model" the bar-and-hinge model and
+        the Hessian's structure, "solve" a solver iteration, "figures" the self-intersection test or the report)."""
         self.started = time.perf_counter()
         self.elapsed_ms = 0.0
 

@@ -24,14 +24,18 @@ ATTRIBUTE = "cf_crossing"
 COUNT_KEY = "cf_self_intersecting_faces"
 
 
-def write_crossing_colours(ob: bpy.types.Object, mesh: FoldMesh, positions: np.ndarray) -> int:
+def write_crossing_colours(
+    ob: bpy.types.Object, mesh: FoldMesh, positions: np.ndarray, crossing: np.ndarray | None = None
+) -> int:
     """Colour the triangles of ``ob`` that cross a non-adjacent triangle at ``positions`` (``(n, 3)`` mm) and store
-    their count on the object; returns the count (−1, and no colours, for non-finite positions)."""
+    their count on the object; returns the count (−1, and no colours, for non-finite positions). ``crossing``: the
+    per-triangle mask if already measured (a job measures it in a unit of its own, before its commit)."""
     positions = np.asarray(positions, dtype=np.float64)
     if not np.all(np.isfinite(positions)):
         ob[COUNT_KEY] = -1
         return -1
-    crossing = intersecting_faces(positions, mesh.triangles)
+    if crossing is None:
+        crossing = intersecting_faces(positions, mesh.triangles)
     mesh_object.write_colours(ob.data, ATTRIBUTE, crossing.astype(np.float64), 1.0)
     count = int(np.count_nonzero(crossing))
     ob[COUNT_KEY] = count

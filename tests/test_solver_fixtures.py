@@ -119,10 +119,10 @@ BIG = {"CircularPleat-antiFacet.svg", "Carved_Cylinder.svg", "Treble_Clef.svg", 
 
 
 KNOWN_APART = {("CircularPleat-antiFacet.svg", 0.6)}
-"""The static fold leaves the saddle this symmetric pleat passes at 20 % (E 0.600608, a minimum); the animation's
-frames skip the minimum check and stay on a saddle of the symmetric branch (E 0.600623). With the check on every
-frame the animation ends in another minimum (E 0.600619): several minima lie within 2e-5 in energy and the path
-decides. Not solved (docs/solver.md, "One natural state")."""
+"""This rotationally symmetric pleat passes a cascade of symmetric saddles from ~20 % on (18–20 negative curvature
+directions), and several minima lie within 1e-6 of each other in energy: the static fold ends in one (E 0.6006067),
+the 5-frame animation in another (E 0.6006072, also a minimum, 4.3e-2 of the diagonal away). Which one a path reaches
+is decided where it leaves the saddles. Not solved (docs/solver.md, "One natural state", with what was tried)."""
 
 
 def _cases():

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import lapack
-from .linalg import _csr
+from .linalg import _csr, inverse_pivot, is_positive_definite, negative_eigenpairs
 
 LEAF_NODES = 16
 """Default largest part (in nodes) that is not dissected further. Small, because :func:`_amalgamate` then merges
@@ -135,9 +135,13 @@ def dissect_pairs(n: int, pairs: np.ndarray, min_block: int | None = None) -> tu
     """:func:`dissect` of the graph of ``pairs`` with leaves of at most ``min_block`` nodes (:data:`LEAF_NODES` by
     default): the most expensive part of :class:`NestedDissection`'s setup (~95 ms of ~160 at 3,000 faces), which a
     Blender job runs as a unit of its own and passes on (``dissection=``)."""
-    leaf = LEAF_NODES if min_block is None else max(1, int(min_block))
     indptr, indices = _csr(n, np.asarray(pairs, dtype=np.int64).reshape(-1, 2))
-    return dissect(n, indptr, indices, leaf)
+    return dissect(n, indptr, indices, _leaf_size(min_block))
+
+
+def _leaf_size(min_block: int | None) -> int:
+    """The largest part not dissected further: ``min_block`` nodes, :data:`LEAF_NODES` by default."""
+    return LEAF_NODES if min_block is None else max(1, int(min_block))
 
 
 def dissect(n: int, indptr: np.ndarray, indices: np.ndarray, leaf: int) -> tuple[list[np.ndarray], np.ndarray]:
@@ -404,7 +408,9 @@ class NestedDissection:
         self.n_nodes = n = int(n_nodes)
         pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
         indptr, indices = _csr(n, pairs)
-        sets, tree = dissection if dissection is not None else dissect_pairs(n, pairs, min_block)
+        if dissection is None:
+            dissection = dissect(n, indptr, indices, _leaf_size(min_block))
+        sets, tree = dissection
         sym = _symbolic(n, sets, tree, indptr, indices)
         if amalgamate:
             sets, tree = _amalgamate(sym, indptr, indices)
@@ -694,22 +700,17 @@ class NestedDissection:
             Sf = np.triu(S)
             Sf += np.triu(S, 1).T
             if inertia and positive_definite:
-                try:
-                    np.linalg.cholesky(Sf)
-                except np.linalg.LinAlgError:
-                    positive_definite = False
+                positive_definite = is_positive_definite(Sf)
             if inertia and not positive_definite:
                 if stop:
                     return stopped()
-                w, v = np.linalg.eigh(Sf)
-                negative += int(np.sum(w < 0))
-                if w[0] < 0:
-                    negatives.append((s, w[w < 0], v[:, w < 0]))
-                if w[0] < lowest[0]:
-                    lowest = (float(w[0]), s, v[:, 0])
-            Sinv = np.linalg.inv(Sf)
-            if not np.all(np.isfinite(Sinv)):
-                raise np.linalg.LinAlgError(f"non-finite inverse of supernode {s}")
+                values, vectors = negative_eigenpairs(Sf)
+                negative += len(values)
+                if len(values):
+                    negatives.append((s, values, vectors))
+                    if values[0] < lowest[0]:
+                        lowest = (float(values[0]), s, vectors[:, 0])
+            Sinv = inverse_pivot(Sf, f"supernode {s}")
             inverses[s] = Sinv
             if b:
                 k = self._sizes[s][4]  # rows above k of C are zero
@@ -799,18 +800,7 @@ class DissectionFactor:
         for s, vals, vecs in self.negative_pairs:
             part = ch[3 * st.start[s] : 3 * st.stop[s]] @ vecs
             w[3 * st.start[s] : 3 * st.stop[s]] += vecs @ (np.where(part < 0, -1.0, 1.0) * vals / lowest)
-        top = max(s for s, _, _ in self.negative_pairs)
-        for s in range(top - 1, -1, -1):
-            Cp = self.couplings[s]
-            if Cp is None:
-                continue
-            g = w[3 * st.start[s] : 3 * st.stop[s]]
-            g[self.first_row[s] :] -= Cp @ w[st.boundary_dofs[s]]
-            if self.chols[s] is not None:
-                self.lib.solve_upper_vector(self.chols[s], g)
-        out = np.empty(self.size)
-        out[st.order] = w
-        return out
+        return self._back_substitute(w, [s for s, _, _ in self.negative_pairs])
 
     def negative_direction(self) -> np.ndarray | None:
         """A direction ``w`` with ``wᵀ A w = λ_min(S_k) < 0`` (natural dof order), or ``None`` if A is not indefinite.
@@ -828,12 +818,21 @@ class DissectionFactor:
         st = self.structure
         w = np.zeros(self.size)
         w[3 * st.start[k] : 3 * st.stop[k]] = z
-        for s in range(k - 1, int(st.first_descendant[k]) - 1, -1):
+        return self._back_substitute(w, [k])
+
+    def _back_substitute(self, w: np.ndarray, seeds: list[int]) -> np.ndarray:
+        """``L⁻ᵀ z`` in natural dof order, for ``z`` (in ``w``, elimination order, overwritten) nonzero on the
+        supernodes ``seeds`` only: ``w_s = z_s − X_s w_{B_s}`` (``−U_s⁻¹ W_s w_{B_s}`` for a Cholesky pivot, whose
+        ``z_s`` is 0) from the highest seed down, over the seeds' subtrees only (see :meth:`negative_direction`:
+        elsewhere ``w_{B_s}`` is 0)."""
+        st = self.structure
+        top = max(seeds)
+        for s in range(top - 1, min(int(st.first_descendant[k]) for k in seeds) - 1, -1):
             Cp = self.couplings[s]
             if Cp is None:
                 continue
             g = w[3 * st.start[s] : 3 * st.stop[s]]
-            g[self.first_row[s] :] = -(Cp @ w[st.boundary_dofs[s]])
+            g[self.first_row[s] :] -= Cp @ w[st.boundary_dofs[s]]
             if self.chols[s] is not None:
                 self.lib.solve_upper_vector(self.chols[s], g)
         out = np.empty(self.size)

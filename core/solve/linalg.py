@@ -84,6 +84,30 @@ def _bfs_levels(start: int, indptr: np.ndarray, indices: np.ndarray, level: np.n
     return levels
 
 
+def is_positive_definite(S: np.ndarray) -> bool:
+    """Whether the symmetric pivot ``S`` has a Cholesky factor (numpy's: the fallback without OpenBLAS)."""
+    try:
+        np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
+def negative_eigenpairs(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The negative eigenvalues of the symmetric pivot ``S`` (ascending) and their eigenvectors as columns: its part
+    of the inertia (Sylvester) and of the negative-curvature directions."""
+    w, v = np.linalg.eigh(S)
+    return w[w < 0], v[:, w < 0]
+
+
+def inverse_pivot(S: np.ndarray, where: str) -> np.ndarray:
+    """``S⁻¹`` of a pivot kept in inverse form; ``np.linalg.LinAlgError`` naming ``where`` if it is not finite."""
+    Sinv = np.linalg.inv(S)
+    if not np.all(np.isfinite(Sinv)):
+        raise np.linalg.LinAlgError(f"non-finite inverse of {where}")
+    return Sinv
+
+
 def level_ordering(n: int, pairs: np.ndarray, min_block: int = 24) -> list[np.ndarray]:
     """Blocks of nodes (list of index arrays, in order) such that ``pairs`` only join equal or adjacent blocks.
 
@@ -253,6 +277,12 @@ class BlockTridiagonal:
                     S -= sub(k - 1) @ couplings[k - 1]
             return S
 
+        def stopped() -> BlockFactor:
+            """The factorisation stopped at its first indefinite pivot (``definite_only``): it cannot solve."""
+            out = BlockFactor(self.dofs, chols, inverses, couplings, 3 * self.n_nodes, lib)
+            out.negative_pivots, out.complete = 1, False
+            return out
+
         for k in range(K):
             if lib is not None:
                 U = pivot(k, full=False)
@@ -270,31 +300,20 @@ class BlockTridiagonal:
                     couplings.append(W)
                     continue
                 if inertia and definite_only:
-                    out = BlockFactor(self.dofs, chols, inverses, couplings, 3 * self.n_nodes, lib)
-                    out.negative_pivots, out.complete = 1, False
-                    return out
+                    return stopped()
                 S = pivot(k, full=True)  # not positive definite: its eigenvalues and inverse
                 positive_definite = False
             else:
                 S = pivot(k, full=True)
-                positive_definite = True
-                if inertia:
-                    try:
-                        np.linalg.cholesky(S)
-                    except np.linalg.LinAlgError:
-                        positive_definite = False
+                positive_definite = not inertia or is_positive_definite(S)
             if inertia and not positive_definite:
                 if definite_only:
-                    out = BlockFactor(self.dofs, chols, inverses, couplings, 3 * self.n_nodes, lib)
-                    out.negative_pivots, out.complete = 1, False
-                    return out
-                w, v = np.linalg.eigh(S)
-                negative += int(np.sum(w < 0))
-                if w[0] < lowest[0]:
-                    lowest = (float(w[0]), k, v[:, 0])
-            Sinv = np.linalg.inv(S)
-            if not np.all(np.isfinite(Sinv)):
-                raise np.linalg.LinAlgError(f"non-finite inverse of block {k}")
+                    return stopped()
+                values, vectors = negative_eigenpairs(S)
+                negative += len(values)
+                if len(values) and values[0] < lowest[0]:
+                    lowest = (float(values[0]), k, vectors[:, 0])
+            Sinv = inverse_pivot(S, f"block {k}")
             chols.append(None)
             inverses.append(Sinv)
             couplings.append(Sinv @ sub(k).T if k < K - 1 else None)

@@ -29,6 +29,8 @@ Blender-level tests ask for two fixtures::
 * ``fixtures_dir`` (session): ``tests/fixtures`` (vendored real crease patterns with their licence and credits).
 * ``ext_module(extension, "scene.curves")`` (plain function, ``from .conftest import ext_module``): import a module
   of the installed copy.
+* ``backend`` (function, engine tests of the linear algebra): runs the test once with numpy's OpenBLAS routines
+  (``core/solve/lapack.py``; skipped where they are not found) and once with the numpy fallback forced.
 
 Never call ``read_factory_settings`` in a test: it disables every add-on (blender-notes §2.1).
 
@@ -151,6 +153,21 @@ def view3d(clean_scene) -> dict:
 def ext_module(extension: ModuleType, name: str) -> ModuleType:
     """Import ``<extension>.<name>`` from the installed copy, e.g. ``ext_module(extension, "scene.curves")``."""
     return importlib.import_module(f"{extension.__name__}.{name}")
+
+
+@pytest.fixture(params=["lapack", "numpy"])
+def backend(request):
+    """Run the test with the OpenBLAS routines and again with the numpy fallback forced."""
+    from curved_fold.core.solve import lapack
+
+    if request.param == "lapack":
+        if lapack.routines() is None:
+            pytest.skip("numpy's OpenBLAS with LAPACK/CBLAS not found (the fallback is what runs here)")
+        yield request.param
+    else:
+        with lapack.disabled():
+            assert lapack.routines() is None
+            yield request.param
 
 
 @pytest.fixture(scope="session")

@@ -12,28 +12,10 @@ from curved_fold.core.solve import lapack
 from curved_fold.core.solve.dissection import NestedDissection, dissect
 from curved_fold.core.solve.linalg import _csr
 from curved_fold.core.solve.model import build_model
+from curved_fold.core.solve.newton import HessianAssembler
 from tests.test_forces import grid_mesh
 
 HAS_OPENBLAS = lapack.routines() is not None
-
-
-@pytest.fixture(params=["lapack", "numpy"])
-def backend(request):
-    """Run the test with the OpenBLAS routines and again with the numpy fallback forced."""
-    if request.param == "lapack":
-        if not HAS_OPENBLAS:
-            pytest.skip("numpy's OpenBLAS with LAPACK/CBLAS not found (the fallback is what runs here)")
-        yield request.param
-    else:
-        with lapack.disabled():
-            assert lapack.routines() is None
-            yield request.param
-
-
-def model_pairs(model) -> np.ndarray:
-    """The node pairs the Newton solver couples (as ``HessianAssembler`` builds them)."""
-    tri = model.triangles
-    return np.concatenate([model.bar_nodes, tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [0, 2]], model.hinge_wings])
 
 
 def random_matrix(n: int, pairs: np.ndarray, seed: int = 0, spread: float = 0.3):
@@ -105,7 +87,7 @@ def test_solves_equal_dense_solves_on_real_mesh_couplings(backend, mesh):
     else:
         model = fixture_model("Rotating_Star.svg")
         leaves = (8, 32)
-    pairs = model_pairs(model)
+    pairs = HessianAssembler.coupling_pairs(model)
     n = model.n_nodes
     rows, cols, blocks, A = random_matrix(n, pairs, seed=1)
     shift = 0.05 - np.linalg.eigvalsh(A)[0]
@@ -133,7 +115,7 @@ def indefinite_grid():
     not merged): ``(n, nd, storage, A, eigenvalues of A)``; shifted below its middle it has negative pivots in
     leaves, inner separators and the root."""
     model = build_model(grid_mesh(8, 8, 80.0))
-    pairs = model_pairs(model)
+    pairs = HessianAssembler.coupling_pairs(model)
     n = model.n_nodes
     rows, cols, blocks, A = random_matrix(n, pairs, seed=3)
     nd = NestedDissection(n, pairs, 6, amalgamate=False)
@@ -209,7 +191,7 @@ def test_negative_direction_back_substitutes_through_the_subtree(backend):
     """A single negative pivot placed on an inner separator (not a leaf, not the root): its direction is nonzero
     on descendants (the back substitution through ``X_s`` reaches them), and ``wᵀ A w`` is its eigenvalue."""
     model = build_model(grid_mesh(10, 10, 80.0))
-    pairs = model_pairs(model)
+    pairs = HessianAssembler.coupling_pairs(model)
     n = model.n_nodes
     rows, cols, blocks, A = random_matrix(n, pairs, seed=5, spread=0.1)
     nd = NestedDissection(n, pairs, 6, amalgamate=False)
@@ -237,7 +219,7 @@ def test_vector_shift_with_huge_and_infinite_entries(backend):
     """Pinned degrees of freedom get a shift of 1e12·scale (the solver's pins) or +inf: their unknowns vanish
     (exactly 0 for +inf) and the others solve the matrix without them."""
     model = build_model(grid_mesh(6, 6, 80.0))
-    pairs = model_pairs(model)
+    pairs = HessianAssembler.coupling_pairs(model)
     n = model.n_nodes
     rows, cols, blocks, A = random_matrix(n, pairs, seed=6)
     base = 0.5 - np.linalg.eigvalsh(A)[0]
@@ -276,8 +258,8 @@ def test_odd_graphs(backend, graph):
     elif graph == "isolated nodes":
         n, pairs = 40, np.array([[3, 4], [10, 11], [11, 12]])
     elif graph == "disconnected":
-        a = model_pairs(build_model(grid_mesh(5, 5)))
-        b = model_pairs(build_model(grid_mesh(3, 4)))
+        a = HessianAssembler.coupling_pairs(build_model(grid_mesh(5, 5)))
+        b = HessianAssembler.coupling_pairs(build_model(grid_mesh(3, 4)))
         n = 36 + 20 + 7  # two grids and 7 isolated nodes
         pairs = np.concatenate([a, b + 36])
     elif graph == "chain":
@@ -319,7 +301,7 @@ def test_dissection_separates_and_stays_in_leaf_size():
     from curved_fold.core.solve.linalg import BlockTridiagonal
 
     model = build_model(grid_mesh(30, 30))
-    pairs = model_pairs(model)
+    pairs = HessianAssembler.coupling_pairs(model)
     n = model.n_nodes
     indptr, indices = _csr(n, pairs)
     sets, parent = dissect(n, indptr, indices, 24)
@@ -336,7 +318,7 @@ def test_dissection_separates_and_stays_in_leaf_size():
 
 def test_couplings_outside_the_structure_are_refused():
     model = build_model(grid_mesh(6, 6))
-    pairs = model_pairs(model)
+    pairs = HessianAssembler.coupling_pairs(model)
     nd = NestedDissection(model.n_nodes, pairs, 6, amalgamate=False)
     leaves = [s for s in range(len(nd.supernodes)) if not nd.children[s]]
     a, b = nd.supernodes[leaves[0]][0], nd.supernodes[leaves[-1]][0]  # two leaves never share a front
@@ -348,7 +330,7 @@ def test_couplings_outside_the_structure_are_refused():
 @pytest.mark.parametrize("where", ["pivot", "coupling", "shift"])
 def test_non_finite_and_singular_raise(backend, where):
     model = build_model(grid_mesh(5, 5))
-    pairs = model_pairs(model)
+    pairs = HessianAssembler.coupling_pairs(model)
     n = model.n_nodes
     rows, cols, blocks, A = random_matrix(n, pairs, seed=10)
     nd = NestedDissection(n, pairs, 5, amalgamate=False)
@@ -434,7 +416,7 @@ def test_amalgamation_merges_where_the_cost_model_gains():
     from curved_fold.core.solve.dissection import _time
 
     model = fixture_model("Rotating_Star.svg")
-    pairs = model_pairs(model)
+    pairs = HessianAssembler.coupling_pairs(model)
     n = model.n_nodes
     plain = NestedDissection(n, pairs, 8, amalgamate=False)
     merged = NestedDissection(n, pairs, 8)

@@ -21,19 +21,6 @@ from tests.test_solver_tail import dense
 HAS_OPENBLAS = lapack.routines() is not None
 
 
-@pytest.fixture(params=["lapack", "numpy"])
-def backend(request):
-    """Run the test with the OpenBLAS routines and again with the numpy fallback forced."""
-    if request.param == "lapack":
-        if not HAS_OPENBLAS:
-            pytest.skip("numpy's OpenBLAS with LAPACK/CBLAS not found (the fallback is what runs here)")
-        yield request.param
-    else:
-        with lapack.disabled():
-            assert lapack.routines() is None
-            yield request.param
-
-
 def chain(n: int = 60, min_block: int = 4, seed: int = 0, spread: float = 0.3):
     """A block-tridiagonal matrix on a chain of n nodes (couplings to the next two): the ordering, its storage and
     the same matrix dense. Diagonal node blocks symmetric + 4 I, off-diagonal ones ``spread``-scaled normals."""

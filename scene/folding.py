@@ -107,14 +107,7 @@ def pattern_steps(objects, *, interval: float = 0.0, tolerance: float = 0.0) -> 
     stored = stored_pattern(objects)  # an unedited FOLD import: its own pattern, as the command line folds it
     if stored is not None:
         return stored
-    reading = curves_steps(objects)
-    while True:
-        try:
-            next(reading)
-        except StopIteration as done:
-            curves = done.value
-            break
-        yield "reading curves"
+    curves = yield from jobs.as_units(curves_steps(objects), "reading curves")
     yield "curves read"
     return (yield from discretize_steps(curves, interval=interval or None, tolerance=tolerance or None))
 
@@ -333,13 +326,7 @@ def _mesh_steps(pattern_units, angle, mesh_type) -> Generator[jobs.Progress, Non
     from ..core.mesh.build import build_mesh
     from ..core.pipeline import _with_angle
 
-    while True:
-        try:
-            next(pattern_units)
-        except StopIteration as done:
-            pattern = done.value
-            break
-        yield jobs.Progress("discretise")
+    pattern = yield from jobs.as_units(pattern_units, jobs.Progress("discretise"))
     pattern = _with_angle(override_fold_angles(pattern, angle), angle)  # Override applies to every crease
     yield jobs.Progress("mesh")
     mesh = build_mesh(pattern, mesh_type=engine_id(mesh_type))
@@ -356,9 +343,7 @@ def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None, 
     method = engine_id(method)
     solver = Solver(mesh, settings, method, constraints)
     if method != "faithful":  # the Hessian's ordering and structure, in units of their own
-        preparing = solver.prepare_steps()
-        for _ in preparing:
-            yield jobs.Progress("model")
+        yield from jobs.as_units(solver.prepare_steps(), jobs.Progress("model"))
     yield jobs.Progress("solve")
     result = yield from solve_progress(solver, percent, start=start)
     yield jobs.Progress("figures")  # the self-intersection test and the report: units of their own (~65 ms each)

@@ -736,8 +736,7 @@ def _discretise_curves(
     # pieces a → b: consecutive points of one segment (every point but each segment's last starts one)
     every = np.concatenate(points).astype(float, copy=False).reshape(-1, 2)
     counts = np.array([len(p) - 1 for p in points], dtype=np.int64)
-    starts = np.concatenate([[0], np.cumsum(counts + 1)[:-1]])
-    first = np.repeat(starts, counts) + (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
+    first = np.delete(np.arange(len(every)), np.cumsum(counts + 1) - 1)
     if hit_budget:
         warnings.append(
             f"discretisation stopped refining at {MAX_SEGMENTS} segments: tolerance {tolerance:g} mm was not "

@@ -385,12 +385,11 @@ def test_backends_agree_on_a_real_fixture_hessian():
     if not HAS_OPENBLAS:
         pytest.skip("numpy's OpenBLAS not found")
     from curved_fold.core.solve import forces as F  # noqa: N812
-    from curved_fold.core.solve.newton import HessianAssembler
 
     model = fixture_model("curvedPleatSimple.svg")
     x = model.rest + np.random.default_rng(12).normal(0, 0.01, model.rest.shape)
     ev = F.evaluate(model, x, F.fold_angles(model, x), 0.8, jacobians=True)
-    assembler = HessianAssembler(model, min_block=8)
+    assembler = HessianAssembler(model, NestedDissection(model.n_nodes, HessianAssembler.coupling_pairs(model), 8))
     H = assembler.assemble_exact(x, ev)
     A = assembler.matrix.dense(H)
     lowest = np.linalg.eigvalsh(A)[0]

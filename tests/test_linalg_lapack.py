@@ -11,6 +11,7 @@ import pytest
 
 from curved_fold.core.solve import forces as F  # noqa: N812
 from curved_fold.core.solve import lapack
+from curved_fold.core.solve.dissection import NestedDissection
 from curved_fold.core.solve.linalg import BlockTridiagonal, _blas_control, single_threaded_blas
 from curved_fold.core.solve.model import build_model
 from curved_fold.core.solve.newton import HessianAssembler
@@ -123,7 +124,7 @@ def test_backends_agree_to_round_off_on_a_real_exact_hessian():
     x = model.rest + np.random.default_rng(7).normal(0, 0.05, model.rest.shape)
     theta = F.fold_angles(model, x)
     ev = F.evaluate(model, x, theta, 0.8, jacobians=True)
-    assembler = HessianAssembler(model, min_block=6)
+    assembler = HessianAssembler(model, NestedDissection(model.n_nodes, HessianAssembler.coupling_pairs(model), 6))
     H = assembler.assemble_exact(x, ev)
     A = dense(assembler, H)
     lowest = np.linalg.eigvalsh(A)[0]

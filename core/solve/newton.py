@@ -83,26 +83,17 @@ blocks and a factorisation for nothing (the Gauss–Newton step is taken instead
 class HessianAssembler:
     """Scatter indices of every element block into the storage of the sparse factorisation, computed once per model.
 
-    ``matrix_class`` is the storage and factorisation: :class:`.dissection.NestedDissection` (nested dissection,
-    multifrontal Cholesky) by default; :class:`.linalg.BlockTridiagonal`, the level-set band it replaced, has the
-    same interface (the benchmarks compare them). ``min_block`` is passed on (``None``: the class's default).
+    ``matrix`` is the storage and factorisation, built on :meth:`coupling_pairs`: by default a
+    :class:`.dissection.NestedDissection` (nested dissection, multifrontal Cholesky); a
+    :class:`.linalg.BlockTridiagonal`, the level-set band it replaced, has the same interface (the benchmarks compare
+    them), and tests pass other leaf sizes.
     """
 
-    def __init__(
-        self,
-        model: BarHingeModel,
-        min_block: int | None = None,
-        matrix_class: type | None = None,
-        matrix: NestedDissection | None = None,
-    ):
+    def __init__(self, model: BarHingeModel, matrix: NestedDissection | None = None):
         self.model = model
         tri = model.triangles
         wings = model.hinge_wings
-        if matrix is None:
-            matrix_class = NestedDissection if matrix_class is None else matrix_class
-            options = {} if min_block is None else {"min_block": min_block}
-            matrix = matrix_class(model.n_nodes, self.coupling_pairs(model), **options)
-        self.matrix = matrix
+        self.matrix = NestedDissection(model.n_nodes, self.coupling_pairs(model)) if matrix is None else matrix
         i, j = model.bar_nodes[:, 0], model.bar_nodes[:, 1]
         self.bar_index = self.matrix.scatter_index(np.concatenate([i, j, i, j]), np.concatenate([i, j, j, i]))
         hn = np.column_stack([wings, model.hinge_edge_nodes])  # (h, 4): w1, w2, v1, v2

@@ -634,7 +634,6 @@ class NestedDissection:
         first_row = [0] * K
         fronts: list[tuple | None] = [None] * K
         negative = 0
-        lowest: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
         negatives: list[tuple[int, np.ndarray, np.ndarray]] = []
 
         def front(s: int) -> tuple:
@@ -708,8 +707,6 @@ class NestedDissection:
                 negative += len(values)
                 if len(values):
                     negatives.append((s, values, vectors))
-                    if values[0] < lowest[0]:
-                        lowest = (float(values[0]), s, vectors[:, 0])
             Sinv = inverse_pivot(Sf, f"supernode {s}")
             inverses[s] = Sinv
             if b:
@@ -720,7 +717,6 @@ class NestedDissection:
                 couplings[s] = X
         out = DissectionFactor(self, chols, inverses, couplings, first_row, lib)
         out.negative_pivots = negative if inertia else None
-        out.lowest_pivot = lowest
         out.negative_pairs = negatives
         return out
 
@@ -745,12 +741,19 @@ class DissectionFactor:
         self.size = 3 * structure.n_nodes
         self.negative_pivots: int | None = None
         """Number of negative eigenvalues of the factored matrix (``None`` when not computed)."""
-        self.lowest_pivot: tuple[float, int, np.ndarray | None] = (0.0, -1, None)
-        """``(eigenvalue, supernode, eigenvector)`` of the most negative pivot eigenvalue found (−1: none)."""
         self.negative_pairs: list[tuple[int, np.ndarray, np.ndarray]] = []
         """Every negative eigenpair of the pivots: ``(supernode, eigenvalues, eigenvectors as columns)``."""
         self.complete = True
         """False for a factorisation stopped at its first indefinite pivot (``definite_only``): it cannot solve."""
+
+    @property
+    def lowest_pivot(self) -> tuple[float, int, np.ndarray | None]:
+        """``(eigenvalue, supernode, eigenvector)`` of the most negative pivot eigenvalue (``(0.0, −1, None)``: none),
+        from :attr:`negative_pairs`."""
+        if not self.negative_pairs:
+            return (0.0, -1, None)
+        s, values, vectors = min(self.negative_pairs, key=lambda pair: pair[1][0])
+        return (float(values[0]), s, vectors[:, 0])
 
     def apply(self, rhs: np.ndarray) -> np.ndarray:
         """``(A + diag(shift))⁻¹ rhs`` for a flat ``3n`` vector.
@@ -796,7 +799,7 @@ class DissectionFactor:
         st = self.structure
         ch = np.asarray(chooser, dtype=np.float64)[st.order]
         w = np.zeros(self.size)
-        lowest = min(float(vals[0]) for _, vals, _ in self.negative_pairs)
+        lowest = self.lowest_pivot[0]
         for s, vals, vecs in self.negative_pairs:
             part = ch[3 * st.start[s] : 3 * st.stop[s]] @ vecs
             w[3 * st.start[s] : 3 * st.stop[s]] += vecs @ (np.where(part < 0, -1.0, 1.0) * vals / lowest)

@@ -1,7 +1,8 @@
 """The closed-form hinge curvature ∇²θ (``forces.hinge_angle_hessian``) is the Jacobian of the hinge gradient: it
-equals the complex-step Jacobian of ``forces.hinge_angle_gradient`` (exact to round-off) on random hinges and on
-nearly flat and nearly closed ones, valley and mountain side; degenerate hinges give zeros, not inf/nan. The face
-blocks (closed-form ∇²α) equal the complex-step Jacobian of ``forces.corner_angle_gradient`` likewise."""
+equals the complex-step Jacobian of :func:`hinge_angle_gradient` (here: the engine's formula written with analytic
+operations only; exact to round-off) on random hinges and on nearly flat and nearly closed ones, valley and mountain
+side; degenerate hinges give zeros, not inf/nan. The face blocks (closed-form ∇²α) equal the complex-step Jacobian of
+:func:`corner_angle_gradient` likewise."""
 
 from __future__ import annotations
 
@@ -13,10 +14,78 @@ from curved_fold.core.solve.model import build_model
 from curved_fold.core.solve.newton import HessianAssembler
 from tests.test_forces import grid_mesh
 
+COMPLEX_STEP = 1e-30
+"""Imaginary step of the complex-step differentiation of the element gradients (exact to round-off)."""
+
+
+def _csqrt_unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``v / |v|`` and ``|v|`` written with analytic operations only (valid for complex-step arguments)."""
+    norm = np.sqrt(np.einsum("...k,...k->...", v, v))
+    return v / norm[..., None], norm
+
+
+def hinge_angle_gradient(x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.ndarray) -> np.ndarray:
+    """``∇θ`` ``(m, 4, 3)`` with respect to wing 1, wing 2, edge node 1, edge node 2 (reference §3.4).
+
+    The same formula as ``forces.evaluate`` (``n/h`` on the wings, foot fractions ``t`` on the edge nodes), written
+    with analytic operations only so that complex-step differentiation gives its exact Jacobian ``∇²θ``: the
+    reference the closed form (``forces.hinge_angle_hessian``) is tested against.
+    """
+    e = x4 - x3
+    chat, L = _csqrt_unit(e)
+    r1, r2 = x1 - x3, x2 - x3
+    n1 = _csqrt_unit(F._cross(e, r1))[0]  # (v2 − v1) × (w1 − v1): the normal of the face left of v1 → v2
+    n2 = _csqrt_unit(F._cross(x3 - x4, x2 - x4))[0]
+    p1, p2 = F._rows_dot(chat, r1), F._rows_dot(chat, r2)
+    h1 = np.sqrt(F._rows_dot(r1, r1) - p1 * p1)
+    h2 = np.sqrt(F._rows_dot(r2, r2) - p2 * p2)
+    t1, t2 = p1 / L, p2 / L
+    g1 = n1 / h1[:, None]
+    g2 = n2 / h2[:, None]
+    g3 = -((1.0 - t1)[:, None] * g1 + (1.0 - t2)[:, None] * g2)
+    g4 = -(t1[:, None] * g1 + t2[:, None] * g2)
+    return np.stack([g1, g2, g3, g4], axis=1)
+
+
+def corner_angle_gradient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """``∂α_corner/∂x_node`` ``(m, 3, 3, 3)`` of the three corner angles of triangles ``(a, b, c)`` (reference §3.5),
+    with analytic operations only (for complex-step differentiation: the tests' reference for the face blocks)."""
+    e_ab, l_ab = _csqrt_unit(b - a)
+    e_ac, l_ac = _csqrt_unit(c - a)
+    e_bc, l_bc = _csqrt_unit(c - b)
+    nrm = _csqrt_unit(F._cross(b - a, c - a))[0]
+    P_ab = F._cross(nrm, e_ab) / l_ab[:, None]
+    P_ac = F._cross(nrm, e_ac) / l_ac[:, None]
+    P_bc = F._cross(nrm, e_bc) / l_bc[:, None]
+    return np.stack(
+        [
+            np.stack([P_ab - P_ac, -P_ab, P_ac], axis=1),
+            np.stack([-P_ab, P_ab + P_bc, -P_bc], axis=1),
+            np.stack([P_ac, -P_bc, P_bc - P_ac], axis=1),
+        ],
+        axis=1,
+    )
+
+
+def _complex_step_jacobian(function, points: np.ndarray) -> np.ndarray:
+    """Jacobian of a vectorised gradient ``function(*nodes) -> (m, …, 3)`` by complex steps, all at once.
+
+    ``points`` is ``(m, q, 3)`` (q nodes per element); returns ``(m, …, q, 3)``: the derivative of every output
+    entry by every node coordinate, exact to round-off (no subtraction, so no step-size error).
+    """
+    m, q, _ = points.shape
+    z = np.broadcast_to(points, (3 * q, m, q, 3)).astype(np.complex128)
+    for k in range(3 * q):
+        z[k, :, k // 3, k % 3] += 1j * COMPLEX_STEP
+    z = z.reshape(3 * q * m, q, 3)
+    out = function(*(z[:, node] for node in range(q))).imag / COMPLEX_STEP  # (3q·m, …)
+    out = out.reshape(3 * q, m, *out.shape[1:])
+    return np.moveaxis(out, 0, -1).reshape(m, *out.shape[2:], q, 3)
+
 
 def complex_step_hessian(points: np.ndarray) -> np.ndarray:
     """Reference ∇²θ ``(m, 4, 4, 3, 3)`` rows ``[a, b, i, j]``: complex-step Jacobian of the analytic gradient."""
-    return F._complex_step_jacobian(F.hinge_angle_gradient, points).transpose(0, 1, 3, 2, 4)
+    return _complex_step_jacobian(hinge_angle_gradient, points).transpose(0, 1, 3, 2, 4)
 
 
 def closed_form(points: np.ndarray, weight: np.ndarray | None = None) -> np.ndarray:
@@ -176,7 +245,7 @@ def test_face_blocks_equal_the_complex_step_curvature(seed):
     ev = F.evaluate(model, x, F.fold_angles(model, x), 0.7, jacobians=True)
     _, _, faces = F.exact_hessian_blocks(model, x, ev)
     tri = model.triangles
-    d2 = F._complex_step_jacobian(F.corner_angle_gradient, x[tri])  # (t, corner, a, i, b, j)
+    d2 = _complex_step_jacobian(corner_angle_gradient, x[tri])  # (t, corner, a, i, b, j)
     ref = np.einsum("tc,tcai,tcbj->tabij", ev.face_ddphi, ev.face_grad, ev.face_grad)
     ref += np.einsum("tc,tcaibj->tabij", ev.face_dphi, d2)
     assert np.max(np.abs(ref)) > 1.0

@@ -28,9 +28,6 @@ FACE_EPS = 1e-7
 FACE_SMOOTH = np.radians(1.0)
 """Width (rad) of the smooth cap of the face-angle energy at 0° and 180° (see :func:`face_angle_energy`)."""
 
-COMPLEX_STEP = 1e-30
-"""Imaginary step of the complex-step differentiation of the element gradients (exact to round-off)."""
-
 
 @dataclass
 class Evaluation:
@@ -335,35 +332,6 @@ def face_angle_energy(alpha: np.ndarray, alpha0: np.ndarray, k: float) -> tuple[
     return phi, dphi, ddphi
 
 
-def _csqrt_unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``v / |v|`` and ``|v|`` written with analytic operations only (valid for complex-step arguments)."""
-    norm = np.sqrt(np.einsum("...k,...k->...", v, v))
-    return v / norm[..., None], norm
-
-
-def hinge_angle_gradient(x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.ndarray) -> np.ndarray:
-    """``∇θ`` ``(m, 4, 3)`` with respect to wing 1, wing 2, edge node 1, edge node 2 (reference §3.4).
-
-    The same formula as :func:`evaluate` (``n/h`` on the wings, foot fractions ``t`` on the edge nodes), written
-    with analytic operations only so that complex-step differentiation gives its exact Jacobian ``∇²θ``: the
-    reference the closed form (:func:`hinge_angle_hessian`) is tested against.
-    """
-    e = x4 - x3
-    chat, L = _csqrt_unit(e)
-    r1, r2 = x1 - x3, x2 - x3
-    n1 = _csqrt_unit(_cross(e, r1))[0]  # (v2 − v1) × (w1 − v1): the normal of the face left of v1 → v2
-    n2 = _csqrt_unit(_cross(x3 - x4, x2 - x4))[0]
-    p1, p2 = _rows_dot(chat, r1), _rows_dot(chat, r2)
-    h1 = np.sqrt(_rows_dot(r1, r1) - p1 * p1)
-    h2 = np.sqrt(_rows_dot(r2, r2) - p2 * p2)
-    t1, t2 = p1 / L, p2 / L
-    g1 = n1 / h1[:, None]
-    g2 = n2 / h2[:, None]
-    g3 = -((1.0 - t1)[:, None] * g1 + (1.0 - t2)[:, None] * g2)
-    g4 = -(t1[:, None] * g1 + t2[:, None] * g2)
-    return np.stack([g1, g2, g3, g4], axis=1)
-
-
 def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Column-wise dot product of ``(3, m)`` arrays (components first: every operation runs over ``m``)."""
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -417,7 +385,8 @@ def _hinge_curvature_factors(
     of wing 1, wing 2, edge node 1, edge node 2, ``X``, ``Y`` ``(spare + 8, 4, 3, m)`` with
     ``∇²θ = Σ_k X[k] Y[k]ᵀ`` (see :func:`_outer_sum`); the first ``spare`` terms are zeros for the caller's own.
 
-    The closed form of the Jacobian of :func:`hinge_angle_gradient` (same n/h and foot-fraction formula, same signs),
+    The closed form of the Jacobian of the hinge gradient of :func:`evaluate` (same n/h and foot-fraction formula, same
+    signs),
     from differentiating ``g_w = n_w/h_w`` and the foot fractions ``t_w`` directly (equivalent to the dihedral-angle
     Hessian of Tamstorf & Grinspun 2013, "Discrete bending forces and their Jacobians", written per wing). Per wing
     ``w`` (unit normal ``n``, moment arm ``h``, ``m`` the unit vector in the face from the crease line to the wing,
@@ -472,9 +441,9 @@ def hinge_angle_hessian(
     x1: np.ndarray, x2: np.ndarray, x3: np.ndarray, x4: np.ndarray, weight: np.ndarray | None = None
 ) -> np.ndarray:
     """``weight · ∇²θ`` ``(m, 4, 4, 3, 3)``, rows ``[node a, node b, i, j]`` (nodes wing 1, wing 2, edge node 1,
-    edge node 2, positions ``(m, 3)``), in closed form (:func:`_hinge_curvature_factors`); the Jacobian of
-    :func:`hinge_angle_gradient`. Degenerate hinges (edge or a moment arm below ``HINGE_EPS``) get zeros, as
-    :func:`evaluate` skips them.
+    edge node 2, positions ``(m, 3)``), in closed form (:func:`_hinge_curvature_factors`): the Jacobian of the hinge
+    gradient ``n/h`` of :func:`evaluate` (tests/test_hinge_hessian.py checks it against complex steps). Degenerate
+    hinges (edge or a moment arm below ``HINGE_EPS``) get zeros, as :func:`evaluate` skips them.
     """
     x1, x2, x3, x4 = (np.ascontiguousarray(v.T) for v in (x1, x2, x3, x4))
     r1, r2, e = x1 - x3, x2 - x3, x4 - x3
@@ -486,42 +455,6 @@ def hinge_angle_hessian(
     X, Y = _hinge_curvature_factors(x1, x2, x3, x4, ok)
     X *= ok if weight is None else np.where(ok, weight, 0.0)
     return _outer_sum(X, Y)
-
-
-def corner_angle_gradient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """``∂α_corner/∂x_node`` ``(m, 3, 3, 3)`` of the three corner angles of triangles ``(a, b, c)`` (reference §3.5),
-    with analytic operations only (for complex-step differentiation: the tests' reference for the face blocks)."""
-    e_ab, l_ab = _csqrt_unit(b - a)
-    e_ac, l_ac = _csqrt_unit(c - a)
-    e_bc, l_bc = _csqrt_unit(c - b)
-    nrm = _csqrt_unit(_cross(b - a, c - a))[0]
-    P_ab = _cross(nrm, e_ab) / l_ab[:, None]
-    P_ac = _cross(nrm, e_ac) / l_ac[:, None]
-    P_bc = _cross(nrm, e_bc) / l_bc[:, None]
-    return np.stack(
-        [
-            np.stack([P_ab - P_ac, -P_ab, P_ac], axis=1),
-            np.stack([-P_ab, P_ab + P_bc, -P_bc], axis=1),
-            np.stack([P_ac, -P_bc, P_bc - P_ac], axis=1),
-        ],
-        axis=1,
-    )
-
-
-def _complex_step_jacobian(function, points: np.ndarray) -> np.ndarray:
-    """Jacobian of a vectorised gradient ``function(*nodes) -> (m, …, 3)`` by complex steps, all at once.
-
-    ``points`` is ``(m, q, 3)`` (q nodes per element); returns ``(m, …, q, 3)``: the derivative of every output
-    entry by every node coordinate, exact to round-off (no subtraction, so no step-size error).
-    """
-    m, q, _ = points.shape
-    z = np.broadcast_to(points, (3 * q, m, q, 3)).astype(np.complex128)
-    for k in range(3 * q):
-        z[k, :, k // 3, k % 3] += 1j * COMPLEX_STEP
-    z = z.reshape(3 * q * m, q, 3)
-    out = function(*(z[:, node] for node in range(q))).imag / COMPLEX_STEP  # (3q·m, …)
-    out = out.reshape(3 * q, m, *out.shape[1:])
-    return np.moveaxis(out, 0, -1).reshape(m, *out.shape[2:], q, 3)
 
 
 def _face_hessian_factors(

@@ -93,6 +93,27 @@ class Constraints:
         out[self.pins[has]] = self.pin_targets[has]
         return out
 
+    def holds_pose_only(self, mesh: FoldMesh) -> bool:
+        """Whether the pins can only place the sheet, not bend it: no glue, and every pinned vertex is a corner of
+        one triangle (a corner held on the table, a face fixed as Origami Simulator fixes one). A triangle is rigid
+        to within its strain, so such pins choose the fold's pose and nothing else: the solver folds the sheet free
+        and poses it (:meth:`pose`), instead of making Newton swing the whole sheet about a small anchor."""
+        if len(self.glue) or not 0 < len(self.pins) <= 3:
+            return False
+        return bool(np.any(np.isin(mesh.triangles, self.pins).sum(axis=1) == len(self.pins)))
+
+    def pose(self, positions: np.ndarray, start: np.ndarray, exact: bool = False) -> np.ndarray:
+        """``positions`` ``(n, 3)`` mm moved rigidly so that the pinned vertices come closest to their targets
+        (where they are in ``start`` for pins without a target), by the best rigid fit (:func:`rigid_fit`), with
+        ``exact`` the pinned vertices then put on them."""
+        p = np.asarray(positions, dtype=np.float64)
+        targets = self.place_pins(start)[self.pins]
+        rot, shift = rigid_fit(p[self.pins], targets)
+        out = p @ rot + shift
+        if exact:
+            out[self.pins] = targets
+        return out
+
     def gaps(self, positions: np.ndarray) -> np.ndarray:
         """Distance (mm) between each glued pair at ``positions``."""
         p = np.asarray(positions, dtype=np.float64)
@@ -111,6 +132,19 @@ class Constraints:
             reference = self.place_pins(mesh.vertices_3d if start is None else start)
             out["pin_error_max_mm"] = float(np.linalg.norm(p[self.pins] - reference[self.pins], axis=1).max())
         return out
+
+
+def rigid_fit(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rigid motion (rotation without reflection, then translation) that takes points ``a`` ``(m, 3)`` closest
+    to ``b`` in the least-squares sense (Kabsch): ``(rot, shift)`` with ``a @ rot + shift ≈ b``. One point gives a
+    translation, two leave the turn about their line as the SVD gives it."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    ac, bc = a.mean(axis=0), b.mean(axis=0)
+    u, _, vt = np.linalg.svd((a - ac).T @ (b - bc))
+    d = np.sign(np.linalg.det(u @ vt)) or 1.0
+    rot = u @ np.diag([1.0, 1.0, d]) @ vt
+    return rot, bc - ac @ rot
 
 
 @dataclass

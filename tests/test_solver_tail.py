@@ -137,6 +137,39 @@ def test_a_saddle_is_left_on_the_side_the_branch_chooser_picks_whatever_the_roun
     assert float(np.dot(newton.branch_chooser(model.n_nodes), step.reshape(-1))) > 0
 
 
+def test_gauss_newton_steps_are_stretched_rolling_off_a_saddle(monkeypatch):
+    """Just off the buckling grid's saddle, Gauss–Newton (blind to the negative curvature) rolls down to the bulged
+    minimum with steps that only grow slowly; stretched (2p, 4p while the energy keeps falling) it gets there in
+    fewer iterations, to the same state."""
+    flat = buckling_solver(exact_tail=False).solve(0.0, continuation=False)
+    solver = buckling_solver(exact_tail=False)
+    model = solver.model
+    x = model.from_mm(flat.positions)
+    nudge = 1e-4 * newton.branch_chooser(model.n_nodes).reshape(-1, 3) * np.array([0.0, 0.0, 1.0])
+    runs, default = {}, newton.STRETCH
+    for stretch in (default, 1.0):
+        monkeypatch.setattr(newton, "STRETCH", stretch)
+        xs, _, ev, stats, _ = newton.newton_solve(
+            model,
+            x + nudge,
+            flat.theta,
+            0.0,
+            force_scale=solver.force_scale,
+            tolerance=1e-8,
+            max_iterations=400,
+            exact_tail=False,
+            check_minimum=False,
+        )
+        assert stats.converged
+        runs[stretch] = (xs, ev.energy, stats)
+    (xs, energy, stretched), (x1, energy1, plain) = runs[default], runs[1.0]
+    assert stretched.stretched_steps > 0 and plain.stretched_steps == 0
+    assert stretched.iterations < plain.iterations
+    assert abs(energy - energy1) <= 1e-9 * abs(energy1)
+    assert np.max(np.abs(xs - x1)) < 1e-4  # the same bulge (normalised units)
+    assert np.ptp(model.to_mm(xs)[:, 2]) > 1.0
+
+
 def test_exact_tail_converges_quadratically():
     """From residual 1e-4 the exact Hessian reaches 1e-10 within three iterations (measured: 1.8e-5, 2.1e-7,
     1.7e-11); Gauss–Newton alone is linear (×0.15 per iteration here, seven iterations)."""

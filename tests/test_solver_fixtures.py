@@ -121,8 +121,10 @@ BIG = {"CircularPleat-antiFacet.svg", "Carved_Cylinder.svg", "Treble_Clef.svg", 
 KNOWN_APART = {("CircularPleat-antiFacet.svg", 0.6)}
 """This rotationally symmetric pleat passes a cascade of symmetric saddles from ~20 % on (18–20 negative curvature
 directions), and several minima lie within 1e-6 of each other in energy: the static fold ends in one (E 0.6006067),
-the 5-frame animation in another (E 0.6006072, also a minimum, 4.3e-2 of the diagonal away). Which one a path reaches
-is decided where it leaves the saddles. Not solved (docs/solver.md, "One natural state", with what was tried)."""
+the 5-frame animation in another (also a minimum). They are one shape placed differently on the sheet: a four-lobed
+ring with one lobe tucked in, the tuck elsewhere around the ring (surfaces 8.4e-4 of the diagonal apart once turned
+about the ring's axis, vertices 0.16 apart). Which one a path reaches is decided where it leaves the saddles. Not
+solved (docs/solver.md, "One natural state", with what was tried)."""
 
 
 def _cases():

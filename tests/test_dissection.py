@@ -295,6 +295,57 @@ def test_odd_graphs(backend, graph):
         assert len(nd.supernodes) <= 6  # small components are grouped into leaves, not one supernode each
 
 
+def circles_in_a_square_svg(rings: int = 4, size: float = 100.0) -> str:
+    """Concentric circular creases (M and V in turn) in a square sheet: the constrained Delaunay triangulation fans
+    the region between the square and the outer circle from the square's corners."""
+    c = size / 2
+    paths = "".join(
+        f'<path d="M {c + r:g} {c:g} A {r:g} {r:g} 0 1 0 {c - r:g} {c:g} A {r:g} {r:g} 0 1 0 {c + r:g} {c:g} Z" '
+        f'fill="none" stroke="{"#ff0000" if k % 2 == 0 else "#0000ff"}" opacity="0.5"/>'
+        for k, r in enumerate(np.linspace(0.12 * size, 0.42 * size, rings))
+    )
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{size:g}mm" height="{size:g}mm" '
+        f'viewBox="0 0 {size:g} {size:g}"><rect x="0" y="0" width="{size:g}" height="{size:g}" fill="none" '
+        f'stroke="#000000"/>{paths}</svg>'
+    )
+
+
+def test_fan_hubs_are_ordered_last_and_keep_the_separators_small(backend, tmp_path, monkeypatch):
+    """A node coupled to far more nodes than the median one (a corner fanned to the outer circle) is the root
+    supernode, and the rest is dissected without it: through the hub every node was two steps from every other,
+    the BFS levels swelled and so did the separators (≥ 5× the flops here, 37× at 5,902 faces). Solves still equal
+    dense ones."""
+    from curved_fold.core.io.reader import read_pattern
+    from curved_fold.core.mesh.build import build_mesh
+    from curved_fold.core.solve import dissection
+
+    svg = tmp_path / "circles.svg"
+    svg.write_text(circles_in_a_square_svg())
+    model = build_model(build_mesh(read_pattern(svg)))
+    pairs = HessianAssembler.coupling_pairs(model)
+    n = model.n_nodes
+    indptr, _ = _csr(n, pairs)
+    degree = np.diff(indptr)
+    hubs = dissection.dense_nodes(indptr)
+    assert len(hubs) and np.all(degree[hubs] > 3 * np.median(degree))
+    nd = NestedDissection(n, pairs)
+    check_structure(nd, pairs)
+    assert set(np.concatenate([nd.supernodes[s] for s in range(len(nd.supernodes)) if nd.parent[s] == -1])) >= set(
+        hubs.tolist()
+    )
+    monkeypatch.setattr(dissection, "DENSE_FACTOR", float("inf"))
+    through_hubs = NestedDissection(n, pairs)
+    assert nd.flops() * 5 <= through_hubs.flops()
+    rows, cols, blocks, A = random_matrix(n, pairs, seed=3)
+    shift = 0.05 - np.linalg.eigvalsh(A)[0]
+    factor = nd.factor(storage_of(nd, rows, cols, blocks), shift, inertia=True)
+    assert factor.negative_pivots == 0
+    rhs = np.random.default_rng(4).normal(size=3 * n)
+    x = factor.apply(rhs)
+    np.testing.assert_allclose(x, np.linalg.solve(A + shift * np.eye(3 * n), rhs), atol=1e-9 * np.max(np.abs(x)))
+
+
 def test_dissection_separates_and_stays_in_leaf_size():
     """On a 30×30 grid the top separator is a small fraction of the nodes, the tree is balanced and the parts
     not dissected further are at most the leaf size; the flop count is far below the block-tridiagonal one."""

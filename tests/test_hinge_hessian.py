@@ -250,3 +250,74 @@ def test_face_blocks_equal_the_complex_step_curvature(seed):
     ref += np.einsum("tc,tcaibj->tabij", ev.face_dphi, d2)
     assert np.max(np.abs(ref)) > 1.0
     assert np.max(np.abs(faces - ref)) < 1e-10 * np.max(np.abs(ref))
+
+
+def flat_wing_model():
+    """Two crease hinges; the first has one wing (node 2) 0.02 from its hinge line: a flat triangle (178.9° at
+    node 2), whose hinge stiffness fades (``forces.flat_attenuation``)."""
+    from curved_fold.core.solve.model import mesh_from_triangles
+
+    vertices = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.02], [1.0, -1.0], [3.0, -0.5]])
+    triangles = np.array([[0, 1, 2], [1, 0, 3], [1, 3, 4]])
+    return build_model(mesh_from_triangles(vertices, triangles, {(0, 1): ("V", 90.0), (1, 3): ("M", -60.0)}))
+
+
+def test_fading_hinge_forces_and_exact_hessian_are_the_derivatives_of_its_energy():
+    """A wing of a flat triangle squashed to 30 % of its rest moment arm: the hinge's stiffness is fading
+    (``k₀ att(h1, h2)``), the forces are −∇E and the exact Hessian (with the terms of ``att``'s derivatives) is
+    −∂F/∂x, by central differences. At rest it is Origami Simulator's hinge."""
+    from tests.test_solver_tail import dense, finite_difference_hessian
+
+    model = flat_wing_model()
+    at_rest = F.evaluate(model, model.rest, np.zeros(2), 0.8, jacobians=True)
+    assert len(at_rest.hinge_fading) == 0 and np.array_equal(at_rest.hinge_k, model.hinge_k)
+    x = model.rest.copy()
+    x[3, 2] += 0.3
+    x[4, 2] -= 0.1
+    foot = 0.5 * (x[0] + x[1])
+    x[2] = foot + 0.3 * (x[2] - foot)
+    x += np.random.default_rng(0).normal(0, 1e-5, x.shape)
+    theta = F.fold_angles(model, x)
+    ev = F.evaluate(model, x, theta, 0.8, jacobians=True)
+    assert list(ev.hinge_fading) == [0] and 0.1 < ev.hinge_k[0] / model.hinge_k[0] < 0.99
+    eps = 1e-7
+    grad = np.zeros(x.size)
+    for k in range(x.size):
+        step = np.zeros(x.size)
+        step[k] = eps
+        up = F.evaluate(model, x + step.reshape(x.shape), theta, 0.8, forces=False).energy
+        down = F.evaluate(model, x - step.reshape(x.shape), theta, 0.8, forces=False).energy
+        grad[k] = (up - down) / (2 * eps)
+    np.testing.assert_allclose(ev.forces.reshape(-1), -grad, atol=1e-7 * np.max(np.abs(grad)))
+    assembler = HessianAssembler(model)
+    H = dense(assembler, assembler.assemble_exact(x, ev))
+    fd = finite_difference_hessian(model, x, theta, 0.8)
+    assert np.max(np.abs(H - fd)) < 1e-6 * np.max(np.abs(H))
+
+
+def test_hinge_energy_is_continuous_when_a_flat_triangle_turns_inside_out():
+    """The wing of a flat triangle crossing its hinge line flips the fold angle by 180°: without the fading the
+    energy jumped there (the solver stalled on it: tangent creases, a curve crossing straight pleats); with it the
+    energy on both sides of the line tends to the same value and the force stays bounded."""
+    from dataclasses import replace
+
+    model = flat_wing_model()
+    x = model.rest.copy()
+    x[3, 2] += 0.3
+    theta = F.fold_angles(model, x)
+    foot = 0.5 * (model.rest[0] + model.rest[1])
+
+    def across(m, h):
+        out = []
+        for side in (1.0, -1.0):
+            y = x.copy()
+            y[2] = foot + np.array([0.0, side * h, 0.0])
+            out.append(F.evaluate(m, y, theta, 0.8))
+        return out
+
+    for h in (1e-5, 1e-7):
+        above, below = across(model, h)
+        assert abs(above.energy - below.energy) < 1e3 * h  # → 0 with h
+        assert np.max(np.abs(above.forces)) < 1e3 and np.max(np.abs(below.forces)) < 1e3
+    above, below = across(replace(model, hinge_flat_scale=None), 1e-5)  # Origami Simulator's hinge: a jump
+    assert abs(above.energy - below.energy) > 1.0

@@ -107,6 +107,29 @@ def test_nearly_parallel_creases_make_slivers() -> None:
     assert report["converged"]
 
 
+TANGENT_CIRCLES_SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="0 0 200 200">
+<rect x="0" y="0" width="200" height="200" fill="none" stroke="#000000"/>
+<path d="M 130 100 A 30 30 0 1 0 70 100 A 30 30 0 1 0 130 100 Z" fill="none" stroke="#ff0000" opacity="0.4444"/>
+<path d="M 190 100 A 30 30 0 1 0 130 100 A 30 30 0 1 0 190 100 Z" fill="none" stroke="#0000ff" opacity="0.4444"/>
+<path d="M 160 160.3 A 30 30 0 1 0 100 160.3 A 30 30 0 1 0 160 160.3 Z" fill="none" stroke="#ff0000" opacity="0.4444"/>
+</svg>"""
+"""A mountain and a valley circle touching at (130, 100), a third mountain circle above them; 80° each."""
+
+
+@pytest.mark.parametrize("percent", [0.6, 1.0])
+def test_tangent_circles_fold_where_their_ears_turn_inside_out(tmp_path: Path, percent: float) -> None:
+    """Drawn at 1 mm intervals, the circles leave flat ears (three consecutive nodes as one triangle, 178° in the
+    middle) that the fold presses flat and through: the hinge's fold angle jumps by 180° there. It stalled ("no
+    descent step", 35 and 200 iterations); with the stiffness fading near the hinge line
+    (``forces.flat_attenuation``) the energy stays continuous and the fold converges to a minimum."""
+    svg = tmp_path / "tangent_circles.svg"
+    svg.write_text(TANGENT_CIRCLES_SVG)
+    run = fold_pattern(read_pattern(svg, interval=1.0), percent=percent)
+    assert run.report["smallest_corner_deg"] < 1.0  # the ears and slivers are there
+    report = check_stable(run)
+    assert report["converged"] and report["negative_pivots"] == 0, report["message"]
+
+
 # ------------------------------------------------------------------------------------------- fine / large
 
 

@@ -146,20 +146,22 @@ def test_skinny_triangles_stay_finite_with_all_terms_time_step():
 
 
 def test_all_terms_time_step_accounts_for_skinny_hinges():
-    """Origami Simulator's dt sees only the shortest bar; ours shrinks with the hinge stiffness k/h² (§3.7)."""
+    """Origami Simulator's dt sees only the shortest bar; ours shrinks with the hinge stiffness k/h² (§3.7). The
+    thin pair is skinny (moment arms 2 on a 100 hinge: ours/Origami Simulator's dt 2.8 → 0.8) but not flat: a flat
+    one's stiffness fades (``forces.flat_attenuation``), and with moment arms of 0.5 so does the shrinking."""
     from curved_fold.core.solve.faithful import time_step
 
     fat = mesh_from_triangles(
         np.array([[0, 0], [100, 0], [50, 50], [50, -50]], float), np.array([[0, 1, 2], [1, 0, 3]])
     )
     thin = mesh_from_triangles(
-        np.array([[0, 0], [100, 0], [50, 0.5], [50, -0.5]], float), np.array([[0, 1, 2], [1, 0, 3]])
+        np.array([[0, 0], [100, 0], [50, 2.0], [50, -2.0]], float), np.array([[0, 1, 2], [1, 0, 3]])
     )
     ratios = []
     for mesh in (fat, thin):
         s = Solver(mesh, SolverSettings(), "faithful")
         ratios.append(s.dt / time_step(s.model, "origami_simulator"))
-    assert ratios[1] < 0.1 * ratios[0]
+    assert ratios[1] < 0.35 * ratios[0]
 
 
 def test_all_mountain_vertex_cannot_fold_but_stays_finite():

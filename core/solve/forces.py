@@ -23,6 +23,9 @@ import numpy as np
 from .model import BarHingeModel
 
 HINGE_EPS = 1e-6
+HINGE_FLOOR = 1e-150
+"""Smallest moment arm of a hinge with fading stiffness (``flat_attenuation``): below it ``n/h`` could overflow;
+its fading factor there is ~1e-290, so leaving it out changes nothing."""
 FACE_EPS = 1e-7
 
 FACE_SMOOTH = np.radians(1.0)
@@ -47,6 +50,12 @@ class Evaluation:
     hinge_dev: np.ndarray | None = None
     face_dphi: np.ndarray | None = None
     face_ddphi: np.ndarray | None = None
+    hinge_fading_gn: np.ndarray | None = None
+    """``(len(hinge_fading), 12, 12)``: the positive part of the fading's curvature across each hinge line, added
+    to the Gauss–Newton matrix (``HessianAssembler.assemble``)."""
+    hinge_fading: np.ndarray | None = None
+    """Hinges whose stiffness is fading (a wing in a flat triangle, :func:`flat_attenuation`): their Hessian has
+    the terms of the fading factor's derivatives (:func:`_fading_hinge_blocks`)."""
 
 
 def _rows_dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -144,10 +153,15 @@ def evaluate(
         p1, p2 = _rows_dot(chat, r1), _rows_dot(chat, r2)
         h1 = np.sqrt(np.abs(_rows_dot(r1, r1) - p1 * p1))
         h2 = np.sqrt(np.abs(_rows_dot(r2, r2) - p2 * p2))
-        ok = (L >= HINGE_EPS) & (h1 >= HINGE_EPS) & (h2 >= HINGE_EPS)
+        # with fading stiffness a hinge fades out continuously as a wing reaches the hinge line (its energy, force
+        # and Hessian → 0 there): skipping it below HINGE_EPS instead made a jump (1e-6 of the energy); only the
+        # exact degeneracy, where 1/h overflows, is left out
+        arm = HINGE_EPS if model.hinge_flat_scale is None else HINGE_FLOOR
+        ok = (L >= HINGE_EPS) & (h1 >= arm) & (h2 >= arm)
         theta = np.where(ok, theta, theta_prev)
         out.theta = theta
-        k = np.where(ok, model.hinge_k, 0.0)
+        att, (a1, a2), (b11, _, b22) = flat_attenuation(h1, h2, model.hinge_flat_scale)
+        k = np.where(ok, model.hinge_k * att, 0.0)
         dev = theta - model.hinge_target * float(percent)
         energy += 0.5 * float(np.dot(k, dev * dev))
         if forces or jacobians:
@@ -157,14 +171,40 @@ def evaluate(
             g2 = n2 / np.where(ok, h2, 1.0)[:, None]
             g3 = -((1.0 - t1)[:, None] * g1 + (1.0 - t2)[:, None] * g2)
             g4 = -(t1[:, None] * g1 + t2[:, None] * g2)
+            f = np.flatnonzero(ok & ((a1 != 0) | (a2 != 0)))  # hinges whose stiffness is fading
+            if len(f):  # ∇h_w = c_w ⊗ m_w, c_w = (1 at wing w, 0 at the other, −(1 − t_w), −t_w), m_w ⟂ the edge
+                half = 0.5 * model.hinge_k[f] * dev[f] ** 2
+                grad_h = np.zeros((2, len(f), 4, 3))
+                for w, (r, p_, t) in enumerate(((r1, p1, t1), (r2, p2, t2))):
+                    m_w = (r[f] - p_[f, None] * chat[f]) / np.sqrt(np.sum((r[f] - p_[f, None] * chat[f]) ** 2, axis=1))[
+                        :, None
+                    ]
+                    grad_h[w, :, w] = m_w
+                    grad_h[w, :, 2] = -(1.0 - t[f, None]) * m_w
+                    grad_h[w, :, 3] = -t[f, None] * m_w
             if forces:
                 tau = (-k * dev)[:, None]
                 idx_parts += [w1, w2, v1, v2]
                 val_parts += [tau * g1, tau * g2, tau * g3, tau * g4]
+                if len(f):  # −½ k₀ dev² ∇att, ∇att = a1 ∇h1 + a2 ∇h2
+                    q = -half[:, None, None] * (a1[f, None, None] * grad_h[0] + a2[f, None, None] * grad_h[1])
+                    idx_parts += [w1[f], w2[f], v1[f], v2[f]]
+                    val_parts += [q[:, 0], q[:, 1], q[:, 2], q[:, 3]]
             if jacobians:
                 out.hinge_grad = np.stack([g1, g2, g3, g4], axis=1)
                 out.hinge_k = k
                 out.hinge_dev = dev
+                out.hinge_fading = f
+                if len(f):
+                    # the fading's own stiffness across the hinge line, ½ k₀ dev² σ''(u)/s² ∇h∇hᵀ where positive (as
+                    # the wing nears the line): Gauss–Newton must see it, its length scale is the fading's
+                    g = grad_h.reshape(2, len(f), 12)
+                    c1 = half * np.maximum(b11[f], 0.0)
+                    c2 = half * np.maximum(b22[f], 0.0)
+                    out.hinge_fading_gn = (
+                        c1[:, None, None] * g[0][:, :, None] * g[0][:, None, :]
+                        + c2[:, None, None] * g[1][:, :, None] * g[1][:, None, :]
+                    )
 
     # --- face-angle springs -----------------------------------------------------------------------------------
     if model.face_k > 0:
@@ -223,6 +263,35 @@ def evaluate(
     if forces:
         out.forces = scatter(n, idx_parts, val_parts)
     return out
+
+
+def flat_attenuation(
+    h1: np.ndarray, h2: np.ndarray, scale: np.ndarray | None
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """The factor ``att = σ(h1/s1) σ(h2/s2)`` a hinge's stiffness is multiplied by, with its first and second
+    derivatives in the moment arms: ``(att, (∂att/∂h1, ∂att/∂h2), (∂²/∂h1², ∂²/∂h1∂h2, ∂²/∂h2²))``.
+
+    ``s`` = ``model.hinge_flat_scale`` (:data:`.model.FLAT_RATIO` times the shortest side of the wing's triangle at
+    rest); ``σ(u) = 3u² − 2u³`` below 1 and 1 above, C¹: a hinge whose wings are not in flat triangles is
+    Origami Simulator's exactly. At a wing on the hinge line ``att`` and its slope vanish, so the energy stays
+    continuous when the triangle turns inside out (the fold angle jumps by 180° there) and the force stays bounded
+    (``k ∇θ`` grows as 1/h, ``att`` falls as h²). ``scale`` ``None``: no fading (ones and zeros)."""
+    if scale is None:
+        one, zero = np.ones_like(h1), np.zeros_like(h1)
+        return one, (zero, zero), (zero, zero, zero)
+
+    def smoothstep(h: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        u = np.minimum(h / s, 1.0)
+        inside = u < 1.0
+        return (
+            u * u * (3.0 - 2.0 * u),
+            np.where(inside, 6.0 * u * (1.0 - u) / s, 0.0),
+            np.where(inside, (6.0 - 12.0 * u) / (s * s), 0.0),
+        )
+
+    f1, d1, dd1 = smoothstep(h1, scale[:, 0])
+    f2, d2, dd2 = smoothstep(h2, scale[:, 1])
+    return f1 * f2, (d1 * f2, f1 * d2), (dd1 * f2, d1 * d2, f1 * dd2)
 
 
 def scatter(n: int, nodes: list[np.ndarray], values: list[np.ndarray]) -> np.ndarray:
@@ -527,6 +596,57 @@ def _face_hessian_factors(
     return X, Y
 
 
+def _fading_hinge_blocks(model: BarHingeModel, xt: np.ndarray, ev: Evaluation, f: np.ndarray) -> np.ndarray:
+    """What the fading stiffness ``k₀ att(h1, h2)`` (:func:`flat_attenuation`) adds to the Hessian of the hinges
+    ``f`` beyond ``k ∇θ∇θᵀ + k (θ − θ̄) ∇²θ`` (with ``k = k₀ att``), ``(len(f), 4, 4, 3, 3)``:
+    ``k₀ (θ − θ̄) (∇att ∇θᵀ + ∇θ ∇attᵀ) + ½ k₀ (θ − θ̄)² ∇²att``, in closed form.
+
+    Per wing (nodes wing 1, wing 2, edge node 1, edge node 2; ``c`` the wing's coefficients ``(1 at the wing, 0,
+    −(1 − t), −t)``, ``d = (0, 0, −1, 1)``, ``m`` the unit vector from the hinge line to the wing, ``ê`` along the
+    edge of length ``L``, ``n = ê × m``): ``∇h = c⊗m`` and ``∇²h = (c⊗n)(c⊗n)ᵀ/h − [(c⊗ê)(d⊗m)ᵀ + (d⊗m)(c⊗ê)ᵀ]/L
+    − (h/L²)(d⊗m)(d⊗m)ᵀ`` (the second variation of the distance to a line through two moving points); ``∇att`` and
+    ``∇²att`` follow by the chain rule from the derivatives :func:`flat_attenuation` returns."""
+    wings, edge = model.hinge_wings[f], model.hinge_edge_nodes[f]
+    x3, x4 = xt[:, edge[:, 0]], xt[:, edge[:, 1]]
+    e = x4 - x3
+    L = np.sqrt(_dot3(e, e))
+    chat = e / L
+    ms = len(f)
+    d = np.zeros((4, 1, ms))
+    d[2], d[3] = -1.0, 1.0
+    per_wing = []
+    for w in range(2):
+        r = xt[:, wings[:, w]] - x3
+        p = _dot3(chat, r)
+        perp = r - p * chat
+        h = np.sqrt(_dot3(perp, perp))
+        m = perp / h
+        t = p / L
+        c = np.zeros((4, 1, ms))
+        c[w] = 1.0
+        c[2, 0], c[3, 0] = t - 1.0, -t
+        per_wing.append((h, c * m, c * _cross3(chat, m), c * chat, d * m))
+    (h1, G1, N1, E1, M1), (h2, G2, N2, E2, M2) = per_wing
+    _, (a1, a2), (b11, b12, b22) = flat_attenuation(h1, h2, model.hinge_flat_scale[f])
+    k0, dev = model.hinge_k[f], ev.hinge_dev[f]
+    A, B = k0 * dev, 0.5 * k0 * dev * dev
+    grad_theta = ev.hinge_grad[f].transpose(1, 2, 0)  # (4, 3, ms)
+    grad_att = a1 * G1 + a2 * G2
+    terms = [
+        (A * grad_att, grad_theta),
+        (grad_theta, A * grad_att),
+        (B * b11 * G1, G1),
+        (B * b22 * G2, G2),
+        (B * b12 * G1, G2),
+        (B * b12 * G2, G1),
+    ]
+    for a, h, N, E, M in ((a1, h1, N1, E1, M1), (a2, h2, N2, E2, M2)):
+        terms += [(B * a / h * N, N), (-B * a / L * E, M), (-B * a / L * M, E), (-B * a * h / (L * L) * M, M)]
+    X = np.stack([x for x, _ in terms])
+    Y = np.stack([y for _, y in terms])
+    return _outer_sum(X, Y)
+
+
 def exact_hessian_blocks(
     model: BarHingeModel, x: np.ndarray, ev: Evaluation, work: dict[str, np.ndarray] | None = None
 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
@@ -562,6 +682,9 @@ def exact_hessian_blocks(
         X[0] = k * g
         Y[0] = g
         hinges = _outer_sum(X, Y, work, "hinge ")
+        fading = ev.hinge_fading
+        if fading is not None and len(fading):
+            hinges[fading] += _fading_hinge_blocks(model, xt, ev, fading)
     if ev.face_grad is not None:
         tri, t = model.triangles, len(model.triangles)
         X, Y = _face_hessian_factors(

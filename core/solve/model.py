@@ -27,6 +27,20 @@ import numpy as np
 from ..mesh.fold_mesh import FoldMesh
 from ..pattern.model import PatternError
 
+FLAT_RATIO = float(np.tan(np.radians(2.0)))
+"""A hinge's wing closer to the hinge line than this times the shortest side of its triangle lies in a *flat*
+triangle (its largest corner above ~176°: the ear three consecutive nodes of a finely discretised curve make where
+nothing else is near). There the stiffness fades out smoothly to zero at the line (``forces.flat_attenuation``): the
+fold angle of a hinge is undefined when its wing crosses the hinge line, it jumps by 180° as the triangle turns
+inside out, and so did the energy, which stalled the solver where two creases meet tangentially or a curve crosses
+straight creases (tests/test_forces.py). 2° is the mesh's own sliver bound (``mesh.ruling.SWAP_MIN_CORNER_DEG``)."""
+
+FLAT_FRACTION = 0.5
+"""A wing already that close to its hinge line at rest (an ear of a curve in the flat sheet) fades only once squashed
+below this fraction of its rest moment arm: at rest, and as long as the paper keeps its shape, every hinge is
+Origami Simulator's (fading them from the flat sheet on changed folds: a spiral's crease lost its drive along its
+ears and no longer converged at 100 %)."""
+
 
 @dataclass
 class BarHingeModel:
@@ -57,6 +71,10 @@ class BarHingeModel:
     face_k: float
     n_edges: int
     n_glue: int = 0
+    hinge_flat_scale: np.ndarray | None = None
+    """``(h, 2)``: per hinge and wing, the moment arm below which the hinge's stiffness fades out
+    (:data:`FLAT_RATIO` times the shortest side of the wing's triangle at rest, or :data:`FLAT_FRACTION` of its
+    rest moment arm if that is less; ``forces.flat_attenuation``)."""
 
     @property
     def n_nodes(self) -> int:
@@ -181,6 +199,16 @@ def build_model(
     if not np.all(np.isfinite(alpha0)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(alpha0), axis=1))[0])
         raise PatternError(f"triangle {bad} {mesh.triangles[bad].tolist()} is degenerate (zero-length side)")
+    corners = rest[mesh.triangles]
+    shortest = np.min(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2), axis=1)
+    edge = mesh.edges[hinge_edge]
+    chord = rest[edge[:, 1]] - rest[edge[:, 0]]
+    chord /= np.linalg.norm(chord, axis=1)[:, None]
+    arms = []
+    for w in range(2):  # each wing's moment arm at rest: its distance from the hinge line
+        r = rest[wings[hinge_edge][:, w]] - rest[edge[:, 0]]
+        arms.append(np.linalg.norm(r - np.sum(r * chord, axis=1)[:, None] * chord, axis=1))
+    flat_scale = np.minimum(FLAT_RATIO * shortest[faces[hinge_edge]], FLAT_FRACTION * np.column_stack(arms))
     return BarHingeModel(
         rest=rest,
         center=center,
@@ -198,6 +226,7 @@ def build_model(
         hinge_target=target,
         hinge_is_crease=crease,
         face_alpha0=alpha0,
+        hinge_flat_scale=flat_scale,
         face_k=float(face_stiffness),
         n_edges=len(mesh.edges),
     )

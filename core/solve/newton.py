@@ -154,6 +154,8 @@ class HessianAssembler:
         if ev.hinge_grad is not None and len(ev.hinge_k):
             g = ev.hinge_grad.reshape(len(ev.hinge_k), 12)
             np.multiply(g[:, :, None], (ev.hinge_k[:, None] * g)[:, None, :], out=work["hinge out"])
+            if ev.hinge_fading is not None and len(ev.hinge_fading):
+                work["hinge out"][ev.hinge_fading] += ev.hinge_fading_gn
         else:
             work["hinge out"].fill(0.0)
         if ev.face_grad is not None:

@@ -209,6 +209,7 @@ def build_model(
         r = rest[wings[hinge_edge][:, w]] - rest[edge[:, 0]]
         arms.append(np.linalg.norm(r - np.sum(r * chord, axis=1)[:, None] * chord, axis=1))
     flat_scale = np.minimum(FLAT_RATIO * shortest[faces[hinge_edge]], FLAT_FRACTION * np.column_stack(arms))
+    flat_scale = np.maximum(flat_scale, 1e-12)  # a wing on its hinge line already at rest: no division by zero
     return BarHingeModel(
         rest=rest,
         center=center,

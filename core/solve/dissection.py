@@ -185,13 +185,13 @@ def dissect(n: int, indptr: np.ndarray, indices: np.ndarray, leaf: int) -> tuple
     dist = np.full(n, -1, dtype=np.int64)
     supernodes: list[np.ndarray] = []
     parent: list[int] = []
-    hubs = dense_nodes(indptr) if n else np.zeros(0, dtype=np.int64)
-    rest = np.setdiff1d(np.arange(n, dtype=np.int64), hubs)
-    if len(hubs) and len(rest):
+    hubs = dense_nodes(indptr)
+    if len(hubs) == n:  # nothing would be left to dissect
+        hubs = hubs[:0]
+    if len(hubs):
         supernodes.append(hubs)
         parent.append(-1)
-    else:
-        rest = np.arange(n, dtype=np.int64)
+    rest = np.setdiff1d(np.arange(n, dtype=np.int64), hubs)
     stack: list[tuple[np.ndarray, int]] = [(rest, len(supernodes) - 1)] if n else []
     while stack:
         nodes, par = stack.pop()

@@ -176,9 +176,8 @@ def evaluate(
                 half = 0.5 * model.hinge_k[f] * dev[f] ** 2
                 grad_h = np.zeros((2, len(f), 4, 3))
                 for w, (r, p_, t) in enumerate(((r1, p1, t1), (r2, p2, t2))):
-                    m_w = (r[f] - p_[f, None] * chat[f]) / np.sqrt(np.sum((r[f] - p_[f, None] * chat[f]) ** 2, axis=1))[
-                        :, None
-                    ]
+                    perp = r[f] - p_[f, None] * chat[f]
+                    m_w = perp / np.linalg.norm(perp, axis=1)[:, None]  # the unit moment arm, from the line to wing w
                     grad_h[w, :, w] = m_w
                     grad_h[w, :, 2] = -(1.0 - t[f, None]) * m_w
                     grad_h[w, :, 3] = -t[f, None] * m_w
@@ -272,10 +271,11 @@ def flat_attenuation(
     derivatives in the moment arms: ``(att, (∂att/∂h1, ∂att/∂h2), (∂²/∂h1², ∂²/∂h1∂h2, ∂²/∂h2²))``.
 
     ``s`` = ``model.hinge_flat_scale`` (:data:`.model.FLAT_RATIO` times the shortest side of the wing's triangle at
-    rest); ``σ(u) = 3u² − 2u³`` below 1 and 1 above, C¹: a hinge whose wings are not in flat triangles is
-    Origami Simulator's exactly. At a wing on the hinge line ``att`` and its slope vanish, so the energy stays
-    continuous when the triangle turns inside out (the fold angle jumps by 180° there) and the force stays bounded
-    (``k ∇θ`` grows as 1/h, ``att`` falls as h²). ``scale`` ``None``: no fading (ones and zeros)."""
+    rest, or :data:`.model.FLAT_FRACTION` of its rest moment arm if less); ``σ(u) = 3u² − 2u³`` below 1 and 1
+    above, C¹: a hinge whose wings are not squashed that close to its line is Origami Simulator's exactly. At a
+    wing on the hinge line ``att`` and its slope vanish, so the energy stays continuous when the triangle turns
+    inside out (the fold angle jumps by 180° there) and the force stays bounded (``k ∇θ`` grows as 1/h, ``att``
+    falls as h²). ``scale`` ``None``: no fading (ones and zeros)."""
     if scale is None:
         one, zero = np.ones_like(h1), np.zeros_like(h1)
         return one, (zero, zero), (zero, zero, zero)

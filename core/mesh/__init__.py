@@ -6,6 +6,7 @@ Out: a :class:`.fold_mesh.FoldMesh` — flat vertices, triangles, edges with the
 angle — for the solver.
 
 Modules: :mod:`.triangulate` (§3.2, ``triangle`` or ``mathutils`` backends), :mod:`.ruling` (§3.3 swaps on a
-``bmesh``), :mod:`.earcut` (Origami Simulator's ear clipping, a baseline), :mod:`.build` (pattern → mesh by mesh type,
-timed), :mod:`.fold_mesh` (the mesh's arrays).
+``bmesh``), :mod:`.squash` (then flips away the caps the fold could press flat; not in the paper), :mod:`.earcut`
+(Origami Simulator's ear clipping, a baseline), :mod:`.build` (pattern → mesh by mesh type, timed),
+:mod:`.fold_mesh` (the mesh's arrays).
 """

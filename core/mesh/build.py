@@ -1,6 +1,7 @@
 """Crease pattern → :class:`~.mesh.FoldMesh`, with the mesh type selectable by name (paper §3.2–3.3 and baselines).
 
-* ``"ruling"`` (default): constrained Delaunay triangulation, then the ruling-aware edge swaps (the paper's method);
+* ``"ruling"`` (default): constrained Delaunay triangulation, then the ruling-aware edge swaps (the paper's method)
+  and the squash flips (:mod:`.squash`: no cap the fold can press flat);
 * ``"cdt"``: the constrained Delaunay triangulation alone (the paper's "without swaps" column);
 * ``"earcut"``: Origami Simulator's default: per crease-pattern face, triangles kept, quads split on the shorter
   diagonal, larger faces ear-clipped.
@@ -108,8 +109,7 @@ def _build_mesh(pattern: CreasePattern, mesh_type: str, backend: str) -> FoldMes
             parts.append(tri_f)
             faces_of.append(np.full(len(tri_f), f, dtype=np.int64))
         tris, tface = np.concatenate(parts), np.concatenate(faces_of)
-    elif mesh_type == "ruling" and pattern.edge_from_curve[seg_index].any():
-        # without curve segments no endpoint scores, every cost is ∞ and no swap can lower it: skip the bmesh
+    elif mesh_type == "ruling":
         res = ruling_swaps(pts, tris, tface, seg_pairs, pattern.edge_from_curve[seg_index])
         tris, tface, swaps = res.triangles, res.triangle_face, res.swaps
 

@@ -15,6 +15,9 @@ give (θ_a − θ_b)², zero for the discrete bisector. Following the authors' c
   ``min(SWAP_MIN_CORNER_DEG, smallest corner of the two old ones)``: no sliver beyond what the pattern forces;
 * the candidate with the smallest new cost is swapped, repeatedly, until none is left.
 
+Then :func:`.squash.squash_flips` flips away the caps the fold could press flat (not in the paper; decided on the same
+lists, applied with the swaps).
+
 Because every swap strictly lowers the total cost (∞ counted first), the loop terminates. The loop is a priority
 queue with lazy re-evaluation: after a swap only the edges opposite its four vertices in the triangles around
 them are re-scored (the valence, the quads and the existing edges change only there).
@@ -41,6 +44,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from .squash import SQUASH_STRAIN, squash_flips
 
 _INF = math.inf
 
@@ -71,6 +76,9 @@ class SwapResult:
     rejected_sliver: int = 0
     """Candidates refused because the swap would leave a corner below :data:`SWAP_MIN_CORNER_DEG` and below the
     quad's smallest corner before the swap."""
+    squash_flips: int = 0
+    """Of ``swaps``, the flips after the ruling swaps that removed triangles the fold could press flat
+    (:mod:`.squash`)."""
 
 
 class EndpointScorer:
@@ -490,27 +498,45 @@ def ruling_swaps(
     *,
     max_valence: int = 3,
     max_swaps: int | None = None,
+    squash_strain: float | None = None,
 ) -> SwapResult:
-    """Greedy ruling-aware swaps on a CCW triangulation; pattern ``segments`` (vertex pairs) are never swapped.
+    """Greedy ruling-aware swaps on a CCW triangulation, then the squash flips; pattern ``segments`` (vertex pairs)
+    are never swapped.
 
     ``max_valence``: a new endpoint may have at most this many facet edges in the face before the swap (paper: 3).
-    ``max_swaps`` caps the loop (default: no practical cap; the loop terminates on its own).
-    The swaps are decided on arrays (see the module docstring) and applied with ``bmesh.ops.rotate_edges``.
+    ``max_swaps`` caps the ruling loop (default: no practical cap; the loop terminates on its own).
+    ``squash_strain``: the threshold of :func:`.squash.squash_flips` (default :data:`.squash.SQUASH_STRAIN`, read
+    at the call; 0 turns them off). The swaps are decided on
+    arrays (see the module docstring) and all applied with ``bmesh.ops.rotate_edges``.
     """
     vertices = np.asarray(vertices, dtype=float)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     triangle_face = np.asarray(triangle_face, dtype=np.int64)
     segments = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
-    scorer = EndpointScorer(vertices, segments, np.asarray(segment_is_curve, dtype=bool))
-    swaps, decided, stats = _decide_swaps(vertices, triangles, triangle_face, segments, scorer, max_valence, max_swaps)
+    curve = np.asarray(segment_is_curve, dtype=bool)
+    if curve.any():
+        scorer = EndpointScorer(vertices, segments, curve)
+        swaps, decided, stats = _decide_swaps(
+            vertices, triangles, triangle_face, segments, scorer, max_valence, max_swaps
+        )
+    else:  # without curve segments no endpoint scores, every cost is ∞ and no swap can lower it
+        swaps, decided, stats = [], triangles.tolist(), {"convex": 0, "valence": 0, "sliver": 0}
+    n = len(vertices)
+    constrained = set(
+        (np.minimum(segments[:, 0], segments[:, 1]) * n + np.maximum(segments[:, 0], segments[:, 1])).tolist()
+    )
+    threshold = SQUASH_STRAIN if squash_strain is None else squash_strain
+    flips = squash_flips(vertices, decided, triangle_face.tolist(), constrained, threshold) if threshold > 0 else []
+    swaps += flips
+    counts = (stats["convex"], stats["valence"], stats["sliver"], len(flips))
     if not swaps:
-        return SwapResult(triangles.copy(), triangle_face.copy(), 0, stats["convex"], stats["valence"], stats["sliver"])
+        return SwapResult(triangles.copy(), triangle_face.copy(), 0, *counts)
 
     bm_tris = _apply_with_bmesh(vertices, triangles, swaps)
     tris = np.asarray(decided, dtype=np.int64).reshape(-1, 3)
     if not np.array_equal(_canonical(bm_tris), _canonical(tris)):  # pragma: no cover
         raise RuntimeError("ruling swaps: the BMesh after rotation differs from the decided triangulation")
-    return SwapResult(tris, triangle_face.copy(), len(swaps), stats["convex"], stats["valence"], stats["sliver"])
+    return SwapResult(tris, triangle_face.copy(), len(swaps), *counts)
 
 
 def _apply_with_bmesh(vertices: np.ndarray, triangles: np.ndarray, swaps: list[tuple[int, ...]]) -> np.ndarray:

@@ -271,26 +271,30 @@ def flat_attenuation(
     derivatives in the moment arms: ``(att, (∂att/∂h1, ∂att/∂h2), (∂²/∂h1², ∂²/∂h1∂h2, ∂²/∂h2²))``.
 
     ``s`` = ``model.hinge_flat_scale`` (:data:`.model.FLAT_RATIO` times the shortest side of the wing's triangle at
-    rest, or :data:`.model.FLAT_FRACTION` of its rest moment arm if less); ``σ(u) = 3u² − 2u³`` below 1 and 1
-    above, C¹: a hinge whose wings are not squashed that close to its line is Origami Simulator's exactly. At a
-    wing on the hinge line ``att`` and its slope vanish, so the energy stays continuous when the triangle turns
-    inside out (the fold angle jumps by 180° there) and the force stays bounded (``k ∇θ`` grows as 1/h, ``att``
-    falls as h²). ``scale`` ``None``: no fading (ones and zeros)."""
+    rest, or :data:`.model.FLAT_FRACTION` of its rest moment arm if less); ``σ(u) = 10u³ − 15u⁴ + 6u⁵`` below 1
+    and 1 above, C² at both ends: a hinge whose wings are not squashed that close to its line is Origami
+    Simulator's exactly. At a wing on the hinge line ``att``, its slope and its curvature vanish, so the energy
+    stays C² when the triangle turns inside out (the fold angle jumps by 180° there): ``k ∇θ`` grows as 1/h and
+    ``k ∇θ∇θᵀ`` as 1/h², ``att`` falls as h³, so force and Hessian go to zero there and the third derivatives stay
+    bounded (~k₀/s³). With ``σ = 3u² − 2u³`` (C¹, the fourth pass) the Hessian stayed ~k₀/s² and the third
+    derivatives grew as 1/h: Newton's model held only within ~h of a squashed triangle (1e-10), and folds that
+    pressed one flat crawled or stalled (docs/solver.md). ``scale`` ``None``: no fading (ones and zeros)."""
     if scale is None:
         one, zero = np.ones_like(h1), np.zeros_like(h1)
         return one, (zero, zero), (zero, zero, zero)
 
-    def smoothstep(h: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def smootherstep(h: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         u = np.minimum(h / s, 1.0)
+        w = 1.0 - u
         inside = u < 1.0
         return (
-            u * u * (3.0 - 2.0 * u),
-            np.where(inside, 6.0 * u * (1.0 - u) / s, 0.0),
-            np.where(inside, (6.0 - 12.0 * u) / (s * s), 0.0),
+            u * u * u * (10.0 - 15.0 * u + 6.0 * u * u),
+            np.where(inside, 30.0 * u * u * w * w / s, 0.0),
+            np.where(inside, 60.0 * u * w * (1.0 - 2.0 * u) / (s * s), 0.0),
         )
 
-    f1, d1, dd1 = smoothstep(h1, scale[:, 0])
-    f2, d2, dd2 = smoothstep(h2, scale[:, 1])
+    f1, d1, dd1 = smootherstep(h1, scale[:, 0])
+    f2, d2, dd2 = smootherstep(h2, scale[:, 1])
     return f1 * f2, (d1 * f2, f1 * d2), (dd1 * f2, d1 * d2, f1 * dd2)
 
 

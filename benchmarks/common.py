@@ -213,3 +213,16 @@ def spread(values: Sequence[float]) -> dict[str, float]:
     if len(v) == 0:
         return {"min": float("nan"), "median": float("nan"), "max": float("nan"), "n": 0}
     return {"min": float(v.min()), "median": float(np.median(v)), "max": float(v.max()), "n": int(len(v))}
+
+
+def replace_section(path: Path, begin: str, end: str, body: str) -> None:
+    """Write ``body`` (which starts with ``begin`` and ends with ``end``) over the section between those markers in
+    ``path``, or append it when the markers are absent; atomically."""
+    from curved_fold.core.io.atomic import atomic_write_text
+
+    text = path.read_text() if path.exists() else ""
+    if begin in text and end in text:
+        text = text[: text.index(begin)] + body + text[text.index(end) + len(end) :]
+    else:
+        text = text.rstrip() + "\n\n" + body + "\n"
+    atomic_write_text(path, text)

@@ -393,6 +393,19 @@ def headline(ratios: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
+HAND_WRITTEN = "<!-- END GENERATED: benchmarks/run.py (make bench); the sections below are written by hand and kept -->"
+
+
+def write_doc(doc: Path, body: str) -> None:
+    """Write the generated ``body`` over ``doc``, keeping what follows its :data:`HAND_WRITTEN` marker (the jobs
+    benchmark's section, measured in bpy by ``benchmarks/jobs.py`` and written by hand); atomically."""
+    from curved_fold.core.io.atomic import atomic_write_text
+
+    old = doc.read_text(encoding="utf-8") if doc.exists() else ""
+    kept = old.split(HAND_WRITTEN, 1)[1] if HAND_WRITTEN in old else "\n"
+    atomic_write_text(doc, body.rstrip() + "\n\n" + HAND_WRITTEN + kept)
+
+
 def render(report: dict[str, Any]) -> str:
     """The whole of docs/benchmarks.md from one run's figures."""
     info, t1, ratios = report["machine"], report["table1"], report["ratios"]
@@ -737,9 +750,7 @@ def main(argv: list[str] | None = None) -> int:
     report["load_end"] = load_average()
     report["seconds"] = budget.elapsed
     doc = Path(args.doc)
-    from curved_fold.core.io.atomic import atomic_write_text
-
-    atomic_write_text(doc, render(report))
+    write_doc(doc, render(report))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(report, indent=1, default=str))

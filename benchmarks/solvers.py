@@ -29,6 +29,7 @@ if __package__ in (None, ""):  # run as a script: make the add-on importable as 
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
     __package__ = "curved_fold.benchmarks"
 
+from curved_fold.benchmarks.common import replace_section  # noqa: E402
 from curved_fold.core.io.reader import read_pattern  # noqa: E402
 from curved_fold.core.mesh.build import build_mesh  # noqa: E402
 from curved_fold.core.pattern.model import CreasePattern  # noqa: E402
@@ -286,19 +287,6 @@ def run_tail(quick: bool = False) -> tuple[list[dict[str, Any]], list[str]]:
     return rows, lines
 
 
-def _replace_section(path: Path, begin: str, end: str, body: str) -> None:
-    """Write ``body`` (which starts with ``begin`` and ends with ``end``) over the section between those markers in
-    ``path``, or append it when the markers are absent; atomically."""
-    from curved_fold.core.io.atomic import atomic_write_text
-
-    text = path.read_text() if path.exists() else ""
-    if begin in text and end in text:
-        text = text[: text.index(begin)] + body + text[text.index(end) + len(end) :]
-    else:
-        text = text.rstrip() + "\n\n" + body + "\n"
-    atomic_write_text(path, text)
-
-
 def write_tail_docs(rows: list[dict[str, Any]], lines: list[str], path: Path = DOC) -> None:
     """Replace the ``--tail`` generated section of ``docs/solver.md`` (appended if its markers are absent)."""
     body = "\n".join(
@@ -316,7 +304,7 @@ def write_tail_docs(rows: list[dict[str, Any]], lines: list[str], path: Path = D
             TAIL_END,
         ]
     )
-    _replace_section(path, TAIL_BEGIN, TAIL_END, body)
+    replace_section(path, TAIL_BEGIN, TAIL_END, body)
 
 
 def run_all(quick: bool = False, echo: bool = True) -> list[dict[str, Any]]:
@@ -438,7 +426,7 @@ def write_docs(rows: list[dict[str, Any]], lines: list[str] | None = None, path:
             END,
         ]
     )
-    _replace_section(path, BEGIN, END, body)
+    replace_section(path, BEGIN, END, body)
 
 
 def main(argv: list[str] | None = None) -> int:

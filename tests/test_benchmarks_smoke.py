@@ -62,3 +62,34 @@ def test_quick_bench_run_writes_a_complete_report(tmp_path) -> None:
     for name in ("bench_speed_error.png", "bench_warp_strain.png", "bench_scaling.png"):
         png = tmp_path / name
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+
+
+def test_mesh_table_rewrites_only_its_section_of_the_document(tmp_path) -> None:
+    """``benchmarks/mesh_table.py`` used to write the whole of docs/meshes.md from a template that had fallen behind
+    the hand-written notes (running it would have deleted them); it now replaces only its marked section."""
+    from curved_fold.benchmarks.common import replace_section
+    from curved_fold.benchmarks.mesh_table import MESH_BEGIN, MESH_END, render_markdown
+
+    row = {"name": "x.svg", "vertices": 4, "curve_segments": 0, "earcut": {"faces": 2, "ms": 1.0}}
+    row |= {"cdt": {"faces": 2, "ms": 1.0}, "ruling": {"faces": 2, "ms": 1.5, "swaps": 1}}
+    body = render_markdown([row], 3)
+    assert body.startswith(MESH_BEGIN) and body.endswith(MESH_END) and "| x.svg | 4 | 0 | 2 |" in body
+    doc = tmp_path / "meshes.md"
+    doc.write_text(f"# Title\n\n{MESH_BEGIN}\nold table\n{MESH_END}\n\n## Notes by hand\n")
+    replace_section(doc, MESH_BEGIN, MESH_END, body)
+    text = doc.read_text()
+    assert text.startswith("# Title\n\n" + MESH_BEGIN) and text.endswith(MESH_END + "\n\n## Notes by hand\n")
+    assert "old table" not in text and "| x.svg |" in text
+
+
+def test_make_bench_keeps_the_hand_written_sections_of_its_document(tmp_path) -> None:
+    """``make bench`` regenerates docs/benchmarks.md; it used to drop the jobs section written by hand below it."""
+    from curved_fold.benchmarks.run import HAND_WRITTEN, write_doc
+
+    doc = tmp_path / "benchmarks.md"
+    write_doc(doc, "# Benchmarks\n\nfirst run\n")
+    assert doc.read_text().startswith("# Benchmarks\n\nfirst run\n\n" + HAND_WRITTEN)
+    doc.write_text(doc.read_text().rstrip() + "\n\n## Jobs\n\nby hand\n")
+    write_doc(doc, "# Benchmarks\n\nsecond run\n")
+    text = doc.read_text()
+    assert "second run" in text and "first run" not in text and text.endswith(HAND_WRITTEN + "\n\n## Jobs\n\nby hand\n")

@@ -39,9 +39,9 @@ flip cannot raise those (the CDT already maximises the smallest corner)."""
 
 SQUASH_GAIN = 2.0
 """A flip is made only when it at least doubles the pair's smaller squash strain. Points along a fine curve are
-nearly cocircular, and every triangulation of them has caps: with any gain the loop shuffled them (a wave at
-0.04 mm chords: 102,266 flips, the smallest strain 4.88e-7 → 4.94e-7, +1 s); the caps that a far vertex can
-replace gain 10–100× per flip."""
+nearly cocircular, and every triangulation of them has caps: accepting any rise, the loop shuffled them (a wave at
+0.04 mm chords: 102,266 flips, the smallest strain 4.88e-7 → 4.94e-7, +1 s; with the doubling none); the caps
+that a far vertex can replace gain 10–100× per flip."""
 
 
 def squash_strain(p: list[float], q: list[float], r: list[float]) -> float:

@@ -324,11 +324,17 @@ def test_hinge_energy_is_continuous_when_a_flat_triangle_turns_inside_out():
 
 
 def test_fading_is_c2_force_and_hessian_vanish_at_the_hinge_line():
-    """``σ = 10u³ − 15u⁴ + 6u⁵`` (fifth pass): as the wing of a flat triangle reaches the hinge line, the hinge's
-    force on it falls as h² and its Hessian as h (``k₀σ`` falls as h³ while ∇θ grows as 1/h). With the C¹ fading
-    (``3u² − 2u³``) the force fell only as h and the Hessian stayed ~k₀/s², so Newton's model held only within ~h
-    of a squashed triangle and the fuzz run's folds that pressed one flat stalled (9 of 1,400)."""
+    """``σ = 10u³ − 15u⁴ + 6u⁵`` from ``FLAT_DEAD`` of the fading scale (fifth pass): as the wing of a flat triangle
+    comes down to it, the hinge's force on the wing falls as (h − h₀)² and its Hessian as (h − h₀); below it the
+    hinge has no stiffness at all (a triangle pressed flat has no dihedral angle). With the C¹ fading
+    (``3u² − 2u³``) the force fell only linearly and the Hessian stayed ~k₀/s², so Newton's model held only within ~h
+    of a squashed triangle and the fuzz run's folds that pressed one flat stalled (9 of 1,400); with the C² fading
+    down to the line itself, the last stiffness turned the flat triangle about the line 0.25° per iteration (3 folds
+    at the iteration budget)."""
     from dataclasses import replace
+
+    from curved_fold.core.solve.model import FLAT_DEAD
+    from tests.test_solver_tail import dense
 
     model = replace(flat_wing_model(), face_k=0.0)
     model = replace(model, bar_k=model.bar_k * 0.0)  # the hinges alone: node 2 is a wing of hinge 0 only
@@ -338,17 +344,19 @@ def test_fading_is_c2_force_and_hessian_vanish_at_the_hinge_line():
     x[3, 2] += 0.3
     theta = F.fold_angles(model, x)
     foot = 0.5 * (model.rest[0] + model.rest[1])
-    force, block = [], []
     assembler = HessianAssembler(model)
-    from tests.test_solver_tail import dense
 
-    for u in (1e-2, 1e-4):
+    def at(h):
         y = x.copy()
-        y[2] = foot + np.array([0.0, u * s, 0.0])
+        y[2] = foot + np.array([0.0, h, 0.0])
         ev = F.evaluate(model, y, theta, 0.8, jacobians=True)
-        assert list(ev.hinge_fading) == [0]
-        force.append(np.linalg.norm(ev.forces[2]))
+        assert list(ev.hinge_fading) == ([0] if h > h0 else [])  # below h₀ the hinge is off, not fading
         H = dense(assembler, assembler.assemble_exact(y, ev))
-        block.append(np.max(np.abs(H[6:9, 6:9])))
-    assert force[1] < 1e-3 * force[0]  # ~h²: 1e-4 (C¹: 1e-2)
-    assert block[1] < 0.1 * block[0]  # ~h: 1e-2 (C¹: ~1)
+        return np.linalg.norm(ev.forces[2]), np.max(np.abs(H[6:9, 6:9])), ev.hinge_k[0]
+
+    h0 = FLAT_DEAD * s
+    (f1, b1, _), (f2, b2, _) = (at(h0 + v * (s - h0)) for v in (1e-2, 1e-4))
+    assert f2 < 1e-3 * f1  # ~(h − h₀)²: 1e-4 (C¹: 1e-2)
+    assert b2 < 0.1 * b1  # ~(h − h₀): 1e-2 (C¹: ~1)
+    force, block, k = at(0.5 * h0)
+    assert k == 0.0 and force == 0.0 and block == 0.0

@@ -248,3 +248,30 @@ def test_faithful_solver_capped_run_says_so() -> None:
     assert result.iterations <= 300 and not result.converged
     assert np.all(np.isfinite(result.positions))
     assert "residual" in result.message
+
+
+def test_a_fold_that_presses_a_triangle_flat_converges(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A pattern of the fuzz run (seed 7; 57 faces, its discretised arrays in tests/data/fuzz_flat_triangle.json):
+    the fold presses a 175.7° triangle flat, whose long side is a crease (no flip can remove it). With a hinge
+    stiffness that only fades towards the hinge line, the flat triangle's last stiffness turned its plane about the
+    line by ~0.25° per iteration and the fold crawled to the 500-iteration budget; a triangle pressed below
+    ``model.FLAT_DEAD`` of its fading scale has no hinge stiffness, and the fold converges to a minimum."""
+    import json
+
+    import curved_fold.core.solve.forces as forces
+    from curved_fold.core.pattern.model import CreasePattern
+
+    d = json.loads((Path(__file__).resolve().parent / "data" / "fuzz_flat_triangle.json").read_text())
+    pattern = CreasePattern(
+        vertices=np.array(d["vertices"]),
+        edges=np.array(d["edges"]),
+        assignments=np.array(d["assignments"]),
+        fold_angles=np.array([np.nan if v is None else v for v in d["fold_angles"]]),
+        edge_polyline=np.array(d["edge_polyline"]),
+        edge_from_curve=np.array(d["edge_from_curve"]),
+        sources=d["sources"],
+    )
+    report = check_stable(fold_pattern(pattern, angle=90.0), max_iterations=150)
+    assert report["converged"] and report["negative_pivots"] == 0, report["message"]
+    monkeypatch.setattr(forces, "FLAT_DEAD", 0.0)  # fading to the line itself: the crawl
+    assert not fold_pattern(pattern, angle=90.0).report["converged"]

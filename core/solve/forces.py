@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import BarHingeModel
+from .model import FLAT_DEAD, BarHingeModel
 
 HINGE_EPS = 1e-6
 HINGE_FLOOR = 1e-150
@@ -271,22 +271,25 @@ def flat_attenuation(
     derivatives in the moment arms: ``(att, (∂att/∂h1, ∂att/∂h2), (∂²/∂h1², ∂²/∂h1∂h2, ∂²/∂h2²))``.
 
     ``s`` = ``model.hinge_flat_scale`` (:data:`.model.FLAT_RATIO` times the shortest side of the wing's triangle at
-    rest, or :data:`.model.FLAT_FRACTION` of its rest moment arm if less); ``σ(u) = 10u³ − 15u⁴ + 6u⁵`` below 1
-    and 1 above, C² at both ends: a hinge whose wings are not squashed that close to its line is Origami
-    Simulator's exactly. At a wing on the hinge line ``att``, its slope and its curvature vanish, so the energy
-    stays C² when the triangle turns inside out (the fold angle jumps by 180° there): ``k ∇θ`` grows as 1/h and
-    ``k ∇θ∇θᵀ`` as 1/h², ``att`` falls as h³, so force and Hessian go to zero there and the third derivatives stay
-    bounded (~k₀/s³). With ``σ = 3u² − 2u³`` (C¹, the fourth pass) the Hessian stayed ~k₀/s² and the third
-    derivatives grew as 1/h: Newton's model held only within ~h of a squashed triangle (1e-10), and folds that
-    pressed one flat crawled or stalled (docs/solver.md). ``scale`` ``None``: no fading (ones and zeros)."""
+    rest, or :data:`.model.FLAT_FRACTION` of its rest moment arm if less); ``σ(u) = 10u³ − 15u⁴ + 6u⁵`` of
+    ``u = (h/s − d)/(1 − d)`` clipped to [0, 1], ``d`` = :data:`.model.FLAT_DEAD`: C² at both ends. A hinge whose
+    wings are not squashed that close to its line is Origami Simulator's exactly; one whose wing is within ``d·s`` of
+    it has no stiffness (its triangle is pressed flat and has no dihedral angle), so the energy stays C² when the
+    triangle turns inside out (the fold angle jumps by 180° there) and force and Hessian vanish before ``k ∇θ``
+    (∝ 1/h) and ``k ∇θ∇θᵀ`` (∝ 1/h²) grow. With ``σ = 3u² − 2u³`` from the line itself (C¹, the fourth pass) the
+    Hessian stayed ~k₀/s² there and its derivative grew as 1/h: Newton's model held only within ~h of a squashed
+    triangle (1e-10), and folds that pressed one flat stalled; with the C² fading alone, a flat triangle's last
+    stiffness turned its free plane about the line 0.25° per iteration (docs/solver.md). ``scale`` ``None``: no
+    fading (ones and zeros)."""
     if scale is None:
         one, zero = np.ones_like(h1), np.zeros_like(h1)
         return one, (zero, zero), (zero, zero, zero)
 
-    def smootherstep(h: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        u = np.minimum(h / s, 1.0)
+    def smootherstep(h: np.ndarray, full: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        s = (1.0 - FLAT_DEAD) * full  # σ rises from 0 at FLAT_DEAD·full to 1 at full
+        u = np.clip((h - FLAT_DEAD * full) / s, 0.0, 1.0)
         w = 1.0 - u
-        inside = u < 1.0
+        inside = (u < 1.0) & (u > 0.0)
         return (
             u * u * u * (10.0 - 15.0 * u + 6.0 * u * u),
             np.where(inside, 30.0 * u * u * w * w / s, 0.0),

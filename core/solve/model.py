@@ -30,11 +30,11 @@ from ..pattern.model import PatternError
 FLAT_RATIO = float(np.tan(np.radians(2.0)))
 """A hinge's wing closer to the hinge line than this times the shortest side of its triangle lies in a *flat*
 triangle (its largest corner above ~176°: the ear three consecutive nodes of a finely discretised curve make where
-nothing else is near). There the stiffness fades out smoothly to zero at the line (``forces.flat_attenuation``): the
-fold angle of a hinge is undefined when its wing crosses the hinge line, it jumps by 180° as the triangle turns
-inside out, and so did the energy, which stalled the solver where two creases meet tangentially or a curve crosses
-straight creases (tests/test_hinge_hessian.py, tests/test_robust_hard_cases.py). 2° is the mesh's own sliver
-bound (``mesh.ruling.SWAP_MIN_CORNER_DEG``)."""
+nothing else is near). There the stiffness fades out smoothly, to zero before the line (:data:`FLAT_DEAD`,
+``forces.flat_attenuation``): the fold angle of a hinge is undefined when its wing crosses the hinge line, it jumps
+by 180° as the triangle turns inside out, and so did the energy, which stalled the solver where two creases meet
+tangentially or a curve crosses straight creases (tests/test_hinge_hessian.py, tests/test_robust_hard_cases.py).
+2° is the mesh's own sliver bound (``mesh.ruling.SWAP_MIN_CORNER_DEG``)."""
 
 FLAT_FRACTION = 0.5
 """A wing already that close to its hinge line at rest (an ear of a curve in the flat sheet) fades only once squashed

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .squash import SQUASH_STRAIN, squash_flips
+from .triangulate import _orient2, orient
 
 _INF = math.inf
 
@@ -194,15 +195,6 @@ class EndpointScorer:
         return value
 
 
-def _orient(p: list[float], q: list[float], r: list[float]) -> float:
-    return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
-
-
-def _orient_v(p: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """:func:`_orient` over rows (the same floating-point operations, so the same values)."""
-    return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
-
-
 def _corner(p: list[float], q: list[float], r: list[float]) -> float:
     """Corner angle at p of triangle (p, q, r), radians."""
     ux, uy, wx, wy = q[0] - p[0], q[1] - p[1], r[0] - p[0], r[1] - p[1]
@@ -224,6 +216,11 @@ def _keeps_corners(pa: list[float], pb: list[float], pc: list[float], pd: list[f
 def _strictly_crosses(o1, o2, eps):
     """Segments' end orientations o1, o2 on strictly opposite sides (beyond ``eps``)."""
     return ((o1 > eps) & (o2 < -eps)) | ((o1 < -eps) & (o2 > eps))
+
+
+def _segment_codes(segments: np.ndarray, n: int) -> np.ndarray:
+    """The pattern segments as sorted unique undirected-edge codes ``min·n + max`` (never swapped or flipped)."""
+    return np.unique(np.sort(segments, axis=1) @ np.array([n, 1], dtype=np.int64))
 
 
 def _half_edge_arrays(triangles: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
@@ -265,7 +262,7 @@ class _SwapLoop:
         self.xy = vertices.tolist()
         scale2 = float(np.sum((vertices.max(0) - vertices.min(0)) ** 2)) or 1.0
         self.eps = 1e-12 * scale2
-        self.seg_code = np.unique(np.sort(segments, axis=1) @ np.array([n, 1], dtype=np.int64))
+        self.seg_code = _segment_codes(segments, n)
         self.constrained = set(self.seg_code.tolist())
         self.he = _half_edge_arrays(triangles, n)
         org, dst, _opp, code, twin = self.he
@@ -326,8 +323,8 @@ class _SwapLoop:
         ok &= new_cost < old_cost
         stats["convex"] += int(np.count_nonzero(ok))
         pa, pb, pc, pd = vertices[a_], vertices[b_], vertices[c_], vertices[d_]
-        ok &= _strictly_crosses(_orient_v(pb, pd, pa), _orient_v(pb, pd, pc), eps)
-        ok &= _strictly_crosses(_orient_v(pa, pc, pb), _orient_v(pa, pc, pd), eps)
+        ok &= _strictly_crosses(orient(pb, pd, pa), orient(pb, pd, pc), eps)
+        ok &= _strictly_crosses(orient(pa, pc, pb), orient(pa, pc, pd), eps)
         f_ = self.face_of_he[cand]
         vb = _lookup(self.vf_code, self.vf_count, b_ * self.n_faces + f_)
         vd = _lookup(self.vf_code, self.vf_count, d_ * self.n_faces + f_)
@@ -373,8 +370,8 @@ class _SwapLoop:
         self.stats["convex"] += 1
         xy, eps = self.xy, self.eps
         pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
-        o1, o2 = _orient(pb, pd, pa), _orient(pb, pd, pc)
-        o3, o4 = _orient(pa, pc, pb), _orient(pa, pc, pd)
+        o1, o2 = _orient2(pb, pd, pa), _orient2(pb, pd, pc)
+        o3, o4 = _orient2(pa, pc, pb), _orient2(pa, pc, pd)
         if not ((o1 > eps and o2 < -eps) or (o1 < -eps and o2 > eps)):
             return None
         if not ((o3 > eps and o4 < -eps) or (o3 < -eps and o4 > eps)):
@@ -506,8 +503,8 @@ def ruling_swaps(
     ``max_valence``: a new endpoint may have at most this many facet edges in the face before the swap (paper: 3).
     ``max_swaps`` caps the ruling loop (default: no practical cap; the loop terminates on its own).
     ``squash_strain``: the threshold of :func:`.squash.squash_flips` (default :data:`.squash.SQUASH_STRAIN`, read
-    at the call; 0 turns them off). The swaps are decided on
-    arrays (see the module docstring) and all applied with ``bmesh.ops.rotate_edges``.
+    at the call; 0 turns them off). The swaps are decided on arrays (see the module docstring) and all applied with
+    ``bmesh.ops.rotate_edges``.
     """
     vertices = np.asarray(vertices, dtype=float)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -521,10 +518,7 @@ def ruling_swaps(
         )
     else:  # without curve segments no endpoint scores, every cost is ∞ and no swap can lower it
         swaps, decided, stats = [], triangles.tolist(), {"convex": 0, "valence": 0, "sliver": 0}
-    n = len(vertices)
-    constrained = set(
-        (np.minimum(segments[:, 0], segments[:, 1]) * n + np.maximum(segments[:, 0], segments[:, 1])).tolist()
-    )
+    constrained = set(_segment_codes(segments, len(vertices)).tolist())
     threshold = SQUASH_STRAIN if squash_strain is None else squash_strain
     flips = squash_flips(vertices, decided, triangle_face.tolist(), constrained, threshold) if threshold > 0 else []
     swaps += flips

@@ -27,6 +27,8 @@ import math
 
 import numpy as np
 
+from .triangulate import _orient2
+
 SQUASH_STRAIN = 1e-3
 """Triangles whose squash strain is below this are flipped away where a flip raises it: a cap with a corner above
 ~175° (isosceles: 175° → 9.5e-4) or a needle with a corner below ~0.06°.
@@ -67,10 +69,6 @@ def squash_strains(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     a, b, c = side(p, q), side(q, r), side(r, p)
     longest = np.maximum(np.maximum(a, b), c)
     return (((a + b) + c) - 2.0 * longest) / longest
-
-
-def _orient(p: list[float], q: list[float], r: list[float]) -> float:
-    return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
 
 
 def squash_flips(
@@ -118,7 +116,7 @@ def squash_flips(
         b = tr1[0] + tr1[1] + tr1[2] - a - c
         d = tr2[0] + tr2[1] + tr2[2] - a - c
         pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
-        if _orient(pa, pd, pb) <= 0 or _orient(pd, pc, pb) <= 0:  # quad a, d, c, b not strictly convex
+        if _orient2(pa, pd, pb) <= 0 or _orient2(pd, pc, pb) <= 0:  # quad a, d, c, b not strictly convex
             continue
         s1, s2 = squash_strain(pa, pd, pb), squash_strain(pd, pc, pb)
         if min(s1, s2) <= SQUASH_GAIN * old:

@@ -29,7 +29,7 @@ from .faithful import SolverError, faithful_solve, time_step
 from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
 from .model import BarHingeModel, build_model, with_glue
-from .newton import PIN_DIAGONAL, TAIL_RESIDUAL, HessianAssembler, newton_steps, rigid_shift
+from .newton import MINIMUM_SHIFT, PIN_DIAGONAL, TAIL_RESIDUAL, HessianAssembler, newton_steps, rigid_shift
 
 METHODS = ("fast", "faithful", "isometric")
 
@@ -359,11 +359,12 @@ class Solver:
     def negative_pivots(self, x: np.ndarray, theta: np.ndarray, percent: float) -> int | None:
         """Number of negative eigenvalues of the exact Hessian at ``x`` (normalised): 0 at a stable minimum.
 
-        Counted from the pivots of its block factorisation (shifted by 1e-7 of the force scale, which lifts the six
-        rigid-body modes); ``None`` if the matrix cannot be factored."""
+        Counted from the pivots of its block factorisation (shifted by ``MINIMUM_SHIFT``, 1e-7 of the force scale,
+        which lifts the translations, plus ``rigid_shift`` for the rotations), as ``newton_steps`` measures a
+        converged state; ``None`` if the matrix cannot be factored."""
         ev = evaluate(self.model, x, theta, percent, jacobians=True)
         H = self.assembler.assemble_exact(x, ev)
-        shift = np.full(3 * self.model.n_nodes, 1e-7 * self.force_scale)
+        shift = np.full(3 * self.model.n_nodes, MINIMUM_SHIFT * self.force_scale)
         if self.constraints is not None:  # pinned degrees of freedom are not free to go anywhere: decouple them
             shift += self.constraints.fixed_mask(self.model.n_nodes).reshape(-1) * PIN_DIAGONAL * self.force_scale
         else:  # the rigid rotations' curvature, ∝ the residual force, is not a buckling mode

@@ -29,7 +29,7 @@ from .faithful import SolverError, faithful_solve, time_step
 from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
 from .model import BarHingeModel, build_model, with_glue
-from .newton import MINIMUM_SHIFT, PIN_DIAGONAL, TAIL_RESIDUAL, HessianAssembler, newton_steps, rigid_shift
+from .newton import TAIL_RESIDUAL, Fixed, HessianAssembler, inertia_shift, newton_steps
 
 METHODS = ("fast", "faithful", "isometric")
 
@@ -359,16 +359,16 @@ class Solver:
     def negative_pivots(self, x: np.ndarray, theta: np.ndarray, percent: float) -> int | None:
         """Number of negative eigenvalues of the exact Hessian at ``x`` (normalised): 0 at a stable minimum.
 
-        Counted from the pivots of its block factorisation (shifted by ``MINIMUM_SHIFT``, 1e-7 of the force scale,
-        which lifts the translations, plus ``rigid_shift`` for the rotations), as ``newton_steps`` measures a
-        converged state; ``None`` if the matrix cannot be factored."""
+        Counted from the pivots of its block factorisation, shifted by ``newton.inertia_shift`` (1e-7 of the force
+        scale, which lifts the translations, and the rotations' curvature) as ``newton_steps`` measures a converged
+        state; ``None`` if the matrix cannot be factored."""
         ev = evaluate(self.model, x, theta, percent, jacobians=True)
         H = self.assembler.assemble_exact(x, ev)
-        shift = np.full(3 * self.model.n_nodes, MINIMUM_SHIFT * self.force_scale)
-        if self.constraints is not None:  # pinned degrees of freedom are not free to go anywhere: decouple them
-            shift += self.constraints.fixed_mask(self.model.n_nodes).reshape(-1) * PIN_DIAGONAL * self.force_scale
-        else:  # the rigid rotations' curvature, ∝ the residual force, is not a buckling mode
-            shift += rigid_shift(x, ev.forces)
+        # pinned degrees of freedom are decoupled; without pins the rigid rotations' curvature (∝ the residual
+        # force, not a buckling mode) is lifted
+        pins = None if self.constraints is None else self.constraints.fixed_mask(self.model.n_nodes)
+        fx = Fixed.of(pins, self.force_scale)
+        shift = fx.shift(inertia_shift(x, ev.forces, self.force_scale, fx))
         try:
             return self.assembler.matrix.factor(H, shift, inertia=True).negative_pivots
         except np.linalg.LinAlgError:

@@ -176,8 +176,10 @@ def fold_outcome(curves: list[CreaseCurve], *, angle: float = 90.0, time_limit: 
     assert seconds < TIME_BOUND_S, f"one pattern took {seconds:.1f} s"
     detail = "does not fold as assigned" if report["does_not_fold_as_assigned"] else "folded"
     if not report["converged"]:
-        detail += " (stopped at the iteration cap, residual given)"
-        assert "residual" in report["message"], report["message"]
+        message = report["message"]
+        why = "stalled" if message.startswith("stalled") else "time limit" if "time limit" in message else "cap"
+        detail += f" (not converged: {why}, residual given)"
+        assert "residual" in message, message
     return Outcome(
         "folded",
         detail,
@@ -204,6 +206,17 @@ def test_fuzz_quick(curves: list[CreaseCurve]) -> None:
     """CI profile: 40 derandomised patterns (same ones every run), about 30 s on the CI machine."""
     out = fold_outcome(curves)
     QUICK_COUNTS[f"{out.kind}: {out.detail}"] += 1
+
+
+def test_an_unconverged_fold_is_labelled_with_why_it_stopped() -> None:
+    """A fold stopped by its time limit is counted as "not converged: time limit" (a stall or the iteration cap get
+    their own labels, read from the solver's message)."""
+    c = [(0.0, 0.0), (100.0, 0.0), (100.0, 60.0), (0.0, 60.0)]
+    border = CreaseCurve([_line(c[i], c[(i + 1) % 4]) for i in range(4)], "B", None, closed=True, source="border")
+    crease = CreaseCurve([_cubic([(20, 0), (40, 20), (60, 40), (80, 60)])], "V", 90.0, closed=False, source="crease")
+    out = fold_outcome([border, crease], time_limit=0.0)
+    assert out.kind == "folded" and out.detail.endswith("(not converged: time limit, residual given)"), out.detail
+    assert fold_outcome([border, crease]).detail == "folded"
 
 
 def test_classify_error_knows_the_catalogue() -> None:

@@ -33,7 +33,9 @@ import numpy as np
 from . import mesh_object
 
 SLICE_MS = 80.0
-"""Work per timer tick of a modal job (ms): one unit more than this is the longest a slice can take."""
+"""Work per timer tick of a modal job (ms). A slice ends when the next unit, expected to take as long as the last,
+would end past it: slices stay within it unless one unit alone is longer (running until the budget had passed made
+slices of the budget plus one unit, 120–180 ms on a 3,000-face bake)."""
 
 
 class JobBusyError(RuntimeError):
@@ -291,8 +293,9 @@ def _end(job: Job, state: str) -> None:
 
 
 def run_slice(job: Job, budget_ms: float | None = None) -> bool:
-    """Advance ``job`` by units of work until ``budget_ms`` (default :data:`SLICE_MS`) has passed (at least one
-    unit); show the positions reached; commit when the work is done. Returns True when the job has ended.
+    """Advance ``job`` by units of work while the next one, expected to take as long as the last, ends within
+    ``budget_ms`` (default :data:`SLICE_MS`; at least one unit); show the positions reached; commit when the work is
+    done. Returns True when the job has ended.
 
     An error restores the preview, ends the job (``state == "failed"``, ``job.error``) and is raised again."""
     if not job.running:
@@ -311,12 +314,14 @@ def run_slice(job: Job, budget_ms: float | None = None) -> bool:
                 commit = done.value
                 break
             unit = job.progress.stage  # the label of the unit just done (a progress names the work that follows)
-            job.unit_ms[unit] = max(job.unit_ms.get(unit, 0.0), 1e3 * (time.perf_counter() - tu))
+            now = time.perf_counter()
+            unit_ms = 1e3 * (now - tu)
+            job.unit_ms[unit] = max(job.unit_ms.get(unit, 0.0), unit_ms)
             job.units += 1
             job.progress = progress
             if progress.positions is not None:
                 shown = progress.positions
-            if 1e3 * (time.perf_counter() - t0) >= budget_ms:
+            if 1e3 * (now - t0) + unit_ms >= budget_ms:  # the next unit, as long as this one, would overrun
                 break
         if commit is None:
             if shown is not None and job.preview is not None:

@@ -294,9 +294,26 @@ def test_modal_bake_job_is_atomic_on_cancel(folded, extension):
     before = snapshot()
     job = jobs.start(mod(extension, "scene.bake").bake_job(ob, list(range(1, 6))))
     assert not jobs.run_slice(job, budget_ms=0.0)  # one unit per slice at least
+    while job.progress.stage != "frame":  # the solver's model and Hessian structure first, units of their own
+        assert not jobs.run_slice(job, budget_ms=0.0)
     assert 0 < job.progress.fraction < 1 and job.progress.n_frames == 5
     jobs.cancel(job)  # Esc
     assert job.state == "cancelled" and jobs.running_job(ob.name) is None
+    assert snapshot() == before
+
+
+def test_a_bake_builds_its_solver_in_units_of_their_own(folded, extension):
+    """A bake with no solver cached yet: the model, the Hessian's ordering and its structure are three units before
+    the first frame's Newton iteration (together with it, one unit of ~300 ms at 3,000 faces: a bake's longest
+    slice)."""
+    ob, _, _ = folded
+    jobs = mod(extension, "scene.jobs")
+    mod(extension, "scene.timeline").clear()
+    before = snapshot()
+    job = jobs.start(mod(extension, "scene.bake").bake_job(ob, [1, 2, 3]))
+    stages = [next(job.steps).stage for _ in range(4)]
+    assert stages == ["model", "model", "model", "frame"]
+    jobs.cancel(job)
     assert snapshot() == before
 
 

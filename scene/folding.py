@@ -342,7 +342,7 @@ def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None, 
 
     method = engine_id(method)
     solver = Solver(mesh, settings, method, constraints)
-    if method != "faithful":  # the Hessian's ordering and structure, in units of their own
+    if method != "faithful":  # the Hessian's ordering (one component per unit) and structure, in units of their own
         yield from jobs.as_units(solver.prepare_steps(), jobs.Progress("model"))
     yield jobs.Progress("solve")
     result = yield from solve_progress(solver, percent, start=start)

@@ -141,7 +141,7 @@ class FrameCache:
                 "model", frame=frame_index + 1, n_frames=n_frames, fraction=frame_index / max(n_frames, 1)
             )
             yield built
-            if solver.method != "faithful":  # the ordering, then the structure (prepare_steps yields between)
+            if solver.method != "faithful":  # the ordering in units, the structure, then the scatter indices
                 yield from jobs.as_units(solver.prepare_steps(), built)
                 yield built
         start, theta = self.start(frame, percent)

@@ -303,16 +303,18 @@ def test_modal_bake_job_is_atomic_on_cancel(folded, extension):
 
 
 def test_a_bake_builds_its_solver_in_units_of_their_own(folded, extension):
-    """A bake with no solver cached yet: the model, the Hessian's ordering and its structure are three units before
-    the first frame's Newton iteration (together with it, one unit of ~300 ms at 3,000 faces: a bake's longest
-    slice)."""
+    """A bake with no solver cached yet: the model, the Hessian's ordering (one unit per component) and its
+    structure are units of their own before the first frame's Newton iteration (together with it, one unit of
+    ~300 ms at 3,000 faces: a bake's longest slice)."""
     ob, _, _ = folded
     jobs = mod(extension, "scene.jobs")
     mod(extension, "scene.timeline").clear()
     before = snapshot()
     job = jobs.start(mod(extension, "scene.bake").bake_job(ob, [1, 2, 3]))
-    stages = [next(job.steps).stage for _ in range(4)]
-    assert stages == ["model", "model", "model", "frame"]
+    stages = [next(job.steps).stage]
+    while stages[-1] != "frame" and len(stages) < 200:
+        stages.append(next(job.steps).stage)
+    assert len(stages) >= 4 and set(stages[:-1]) == {"model"} and stages[-1] == "frame"
     jobs.cancel(job)
     assert snapshot() == before
 

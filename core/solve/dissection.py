@@ -21,8 +21,11 @@ factor's ``apply``, inertia and negative-curvature direction), so :class:`.newto
 
 from __future__ import annotations
 
+from collections.abc import Generator
+
 import numpy as np
 
+from .. import run_to_end
 from . import lapack
 from .linalg import _csr, inverse_pivot, is_positive_definite, negative_eigenpairs
 
@@ -156,10 +159,18 @@ def _along(
 
 def dissect_pairs(n: int, pairs: np.ndarray, min_block: int | None = None) -> tuple[list[np.ndarray], np.ndarray]:
     """:func:`dissect` of the graph of ``pairs`` with leaves of at most ``min_block`` nodes (:data:`LEAF_NODES` by
-    default): the most expensive part of :class:`NestedDissection`'s setup (~95 ms of ~160 at 3,000 faces), which a
-    Blender job runs as a unit of its own and passes on (``dissection=``)."""
+    default): the most expensive part of :class:`NestedDissection`'s setup (~95 ms of ~160 at 3,000 faces, 220 ms
+    at 4,000 faces on a clef of many strips), which a Blender job runs in units (:func:`dissect_pairs_steps`) and
+    passes on (``dissection=``)."""
+    return run_to_end(dissect_pairs_steps(n, pairs, min_block))
+
+
+def dissect_pairs_steps(
+    n: int, pairs: np.ndarray, min_block: int | None = None
+) -> Generator[None, None, tuple[list[np.ndarray], np.ndarray]]:
+    """:func:`dissect_pairs` one unit per ``next`` (:func:`dissect_steps`); the generator returns its value."""
     indptr, indices = _csr(n, np.asarray(pairs, dtype=np.int64).reshape(-1, 2))
-    return dissect(n, indptr, indices, _leaf_size(min_block))
+    return (yield from dissect_steps(n, indptr, indices, _leaf_size(min_block)))
 
 
 def _leaf_size(min_block: int | None) -> int:
@@ -168,6 +179,14 @@ def _leaf_size(min_block: int | None) -> int:
 
 
 def dissect(n: int, indptr: np.ndarray, indices: np.ndarray, leaf: int) -> tuple[list[np.ndarray], np.ndarray]:
+    """Nested dissection of the graph ``(indptr, indices)`` on ``n`` nodes: ``(supernodes, parent)``, at once
+    (:func:`dissect_steps` run to its end)."""
+    return run_to_end(dissect_steps(n, indptr, indices, leaf))
+
+
+def dissect_steps(
+    n: int, indptr: np.ndarray, indices: np.ndarray, leaf: int
+) -> Generator[None, None, tuple[list[np.ndarray], np.ndarray]]:
     """Nested dissection of the graph ``(indptr, indices)`` on ``n`` nodes: ``(supernodes, parent)``.
 
     The supernodes (node index arrays) are in creation order, every parent before its children; ``parent[s]`` is
@@ -179,6 +198,8 @@ def dissect(n: int, indptr: np.ndarray, indices: np.ndarray, leaf: int) -> tuple
     fewer flops on grids and on Carved_Cylinder than one end only); its two sides are parts again. A component
     whose levelling has fewer than three levels (a clique-like graph) is a leaf whatever its size. Dense nodes
     (:func:`dense_nodes`, hubs of a fan) are the root supernode, ordered last, and the rest is dissected without them.
+    Yields (``None``) after each component is levelled and cut or set aside, so a Blender job can stop between
+    any two; the generator returns ``(supernodes, parent)``.
     """
     degree = np.diff(indptr)
     allowed = np.zeros(n, dtype=bool)
@@ -241,6 +262,7 @@ def dissect(n: int, indptr: np.ndarray, indices: np.ndarray, leaf: int) -> tuple
                 group_size += len(comp)
             allowed[comp] = False
             left = left[allowed[left]]
+            yield
         if group:
             supernodes.append(np.concatenate(group))
             parent.append(par)

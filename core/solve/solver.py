@@ -24,7 +24,7 @@ from .. import run_to_end
 from ..mesh.fold_mesh import FoldMesh
 from ..pattern.model import PatternError
 from .constraints import GLUE_STIFFNESS, Constraints, rigid_fit
-from .dissection import NestedDissection, dissect_pairs
+from .dissection import NestedDissection, dissect_pairs_steps
 from .faithful import SolverError, faithful_solve, time_step
 from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
@@ -170,14 +170,22 @@ class Solver:
         return run_to_end(self.prepare_steps())
 
     def prepare_steps(self) -> Generator[str, None, HessianAssembler]:
-        """Make :attr:`assembler` in two units for a Blender job: the nested dissection of the coupling graph
-        (~95 ms at 3,000 faces), then the factorisation's structure and the scatter indices (~60 ms); yields
-        between them, returns the assembler (at once if it exists)."""
+        """Make :attr:`assembler` in units for a Blender job: the nested dissection of the coupling graph one
+        component at a time ("ordering": ~95 ms in all at 3,000 faces, ~220 ms on a 4,000-face clef of many
+        strips), then the factorisation's structure ("structure", ~35 ms), then the scatter indices; returns the
+        assembler (at once if it exists)."""
         if self._assembler is None:
             pairs = HessianAssembler.coupling_pairs(self.model)
-            dissection = dissect_pairs(self.model.n_nodes, pairs)
-            yield "ordering"
+            steps = dissect_pairs_steps(self.model.n_nodes, pairs)
+            while True:
+                try:
+                    next(steps)
+                except StopIteration as done:
+                    dissection = done.value
+                    break
+                yield "ordering"
             matrix = NestedDissection(self.model.n_nodes, pairs, dissection=dissection)
+            yield "structure"
             self._assembler = HessianAssembler(self.model, matrix=matrix)
         return self._assembler
 

@@ -235,7 +235,7 @@ def test_exact_hessian_blocks_use_the_closed_form():
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_face_blocks_equal_the_complex_step_curvature(seed):
-    """The face blocks Σ φ''∇α∇αᵀ + φ'∇²α (closed form, ten outer products per corner) equal the same sum with ∇²α
+    """The face blocks Σ φ''∇α∇αᵀ + φ'∇²α (closed form through the edge lengths) equal the same sum with ∇²α
     the complex-step Jacobian of ``corner_angle_gradient``; also with squashed and stretched corners."""
     mesh = grid_mesh(3, 3, creases={(1, 5): ("V", 90.0), (5, 9): ("M", -60.0)})
     model = build_model(mesh, face_stiffness=0.3)

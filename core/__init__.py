@@ -20,3 +20,16 @@ def run_to_end(steps: Generator[object, None, _R]) -> _R:
             next(steps)
         except StopIteration as done:
             return done.value
+
+
+def as_units(steps: Generator[object, None, _R], label: object) -> Generator[object, None, _R]:
+    """Run ``steps`` (a stage in units of work) yielding ``label`` after each of its units; return its value.
+
+    For a stage nested in another whose units are labelled differently (``Solver.prepare_steps`` runs the nested
+    dissection's units as "ordering"; a Blender job labels each with its progress)."""
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+        yield label

@@ -15,6 +15,7 @@ from typing import Any
 import bpy
 import numpy as np
 
+from ..core import as_units
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
 from . import bake, jobs, mesh_object, pins, self_intersection
@@ -107,7 +108,7 @@ def pattern_steps(objects, *, interval: float = 0.0, tolerance: float = 0.0) -> 
     stored = stored_pattern(objects)  # an unedited FOLD import: its own pattern, as the command line folds it
     if stored is not None:
         return stored
-    curves = yield from jobs.as_units(curves_steps(objects), "reading curves")
+    curves = yield from as_units(curves_steps(objects), "reading curves")
     yield "curves read"
     return (yield from discretize_steps(curves, interval=interval or None, tolerance=tolerance or None))
 
@@ -326,7 +327,7 @@ def _mesh_steps(pattern_units, angle, mesh_type) -> Generator[jobs.Progress, Non
     from ..core.mesh.build import build_mesh
     from ..core.pipeline import _with_angle
 
-    pattern = yield from jobs.as_units(pattern_units, jobs.Progress("discretise"))
+    pattern = yield from as_units(pattern_units, jobs.Progress("discretise"))
     pattern = _with_angle(override_fold_angles(pattern, angle), angle)  # Override applies to every crease
     yield jobs.Progress("mesh")
     mesh = build_mesh(pattern, mesh_type=engine_id(mesh_type))
@@ -343,7 +344,7 @@ def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None, 
     method = engine_id(method)
     solver = Solver(mesh, settings, method, constraints)
     if method != "faithful":  # the Hessian's ordering (one component per unit) and structure, in units of their own
-        yield from jobs.as_units(solver.prepare_steps(), jobs.Progress("model"))
+        yield from as_units(solver.prepare_steps(), jobs.Progress("model"))
     yield jobs.Progress("solve")
     result = yield from solve_progress(solver, percent, start=start)
     yield jobs.Progress("figures")  # the self-intersection test and the report: units of their own (~65 ms each)

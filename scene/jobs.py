@@ -80,16 +80,6 @@ class Progress:
 JobSteps = Generator[Progress, None, Callable[[], Any]]
 
 
-def as_units(steps: Generator[Any, None, Any], label: Any) -> Generator[Any, None, Any]:
-    """Run ``steps`` (an engine stage in units) yielding ``label`` after each of its units; return its value."""
-    while True:
-        try:
-            next(steps)
-        except StopIteration as done:
-            return done.value
-        yield label
-
-
 class PositionsPreview:
     """Intermediate positions shown on an existing fold object; :meth:`restore` puts back the exact bytes.
 

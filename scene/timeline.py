@@ -23,6 +23,7 @@ import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
+from ..core import as_units
 from . import app_handlers, bake, folding, jobs, mesh_object
 from .fold_settings import engine_id, settings_dict
 
@@ -142,7 +143,7 @@ class FrameCache:
             )
             yield built
             if solver.method != "faithful":  # the ordering in units, the structure, then the scatter indices
-                yield from jobs.as_units(solver.prepare_steps(), built)
+                yield from as_units(solver.prepare_steps(), built)
                 yield built
         start, theta = self.start(frame, percent)
         steps = solver.solve_steps(percent, start=start, theta_prev=theta)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .. import run_to_end
+from .. import as_units, run_to_end
 from ..mesh.fold_mesh import FoldMesh
 from ..pattern.model import PatternError
 from .constraints import GLUE_STIFFNESS, Constraints, rigid_fit
@@ -176,14 +176,7 @@ class Solver:
         assembler (at once if it exists)."""
         if self._assembler is None:
             pairs = HessianAssembler.coupling_pairs(self.model)
-            steps = dissect_pairs_steps(self.model.n_nodes, pairs)
-            while True:
-                try:
-                    next(steps)
-                except StopIteration as done:
-                    dissection = done.value
-                    break
-                yield "ordering"
+            dissection = yield from as_units(dissect_pairs_steps(self.model.n_nodes, pairs), "ordering")
             matrix = NestedDissection(self.model.n_nodes, pairs, dissection=dissection)
             yield "structure"
             self._assembler = HessianAssembler(self.model, matrix=matrix)

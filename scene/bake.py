@@ -320,7 +320,9 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
     """The Bake operator's one scene call: a job that folds ``ob`` frame by frame (units: solver iterations, or
     chunks of explicit steps in dynamic mode) and, when done, writes the shape keys and returns a
     :class:`BakeSummary`. Quasi-static frames come from, and go to, the timeline cache (``timeline``): a frame
-    solved during playback is not solved again, and each new frame warm-starts from the nearest solved one."""
+    solved during playback is not solved again if it converged; each new frame warm-starts from a solved one a
+    small step before it, or is solved from the natural path with the whole iteration budget
+    (``timeline.FrameCache.solve_steps``)."""
     import time
 
     from . import folding, jobs, timeline
@@ -379,11 +381,13 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
         else:
             for i, f in enumerate(frames):
                 hit = cache.get(f, float(percents[i]), props)
-                if hit is not None:
+                if hit is not None and hit.converged:
                     summary.cached += 1
                     entry = hit
-                else:
-                    entry = yield from cache.solve_steps(f, float(percents[i]), props, frame_index=i, n_frames=n)
+                else:  # playback's frames from the path are capped; a bake gives them the whole budget
+                    entry = yield from cache.solve_steps(
+                        f, float(percents[i]), props, frame_index=i, n_frames=n, path_budget=None
+                    )
                     summary.iterations += entry.iterations
                 if not entry.converged:
                     summary.unconverged.append(f)

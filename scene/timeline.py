@@ -2,10 +2,12 @@
 to that frame's percent — the design's "solver stepped per frame".
 
 * :class:`FrameCache` (one per fold object) keeps every solved frame (fold percent, settings, positions, θ
-  history). A new frame warm-starts from the nearest solved frame (extrapolated in the fold percent), so playback
-  costs a few Newton iterations per frame (at most :data:`FRAME_MAX_ITERATIONS`); the cache is dropped when the
+  history). A new frame a small step after a solved one warm-starts from it (extrapolated in the fold percent), so
+  playback costs a few Newton iterations per frame (at most :data:`FRAME_MAX_ITERATIONS`); any other frame is
+  solved from the natural path (``core.solve.path``), whose grid states the frame cache's solver keeps, and is then
+  the static fold at its percent (a bake gives it the whole iteration budget). The cache is dropped when the
   stored mesh changes (re-fold, live edit) and its entries are not reused when the solver settings differ. Bakes
-  read it and fill it (``bake.bake_job``): a frame is solved once.
+  read it and fill it (``bake.bake_job``): a converged frame is solved once.
 * :func:`on_frame_change` (``frame_change_post``) folds each animated fold object that is not showing a current
   bake and has no job running. It is synchronous, as Blender needs the frame's shape before it draws or renders it.
 
@@ -94,7 +96,7 @@ class FrameCache:
         key = settings_key(props)
         if key not in self._solvers:
             method = "fast" if props.solver == "FAITHFUL" else engine_id(props.solver)
-            settings = folding.solver_settings(props, max_iterations=FRAME_MAX_ITERATIONS)
+            settings = folding.solver_settings(props)  # frames are capped per solve (solve_steps)
             self._solvers = {key: Solver(self.mesh, settings, method)}
         return self._solvers[key]
 
@@ -105,36 +107,62 @@ class FrameCache:
             return hit
         return None
 
-    def nearest(self, frame: int) -> CachedFrame | None:
-        """The solved frame nearest ``frame`` (the warm start of a new one)."""
-        if not self.frames:
-            return None
-        return self.frames[min(self.frames, key=lambda f: (abs(f - frame), f))]
+    def start(
+        self, frame: int, percent: float, props, fallback: bool = False
+    ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Start of a new frame's solve: the solved frame that may warm-start it (:func:`.path.warm_startable`:
+        a small step forward between the same two grid points of the natural path; the nearest such), extrapolated
+        linearly in the fold percent from it and the equilibrium before it on the path (an earlier such frame, else
+        the path's grid state), when the step is no longer than theirs. ``(None, None)`` when no frame may: the frame
+        is then solved from the natural path, as a static fold is (so it is the static fold at its percent) — unless
+        ``fallback`` (playback, capped per frame) and the path's grid state before ``percent`` is not kept yet: then
+        the nearest solved frame is the start, as before the natural path (a capped solve of the path from the flat
+        sheet would show a frame far behind the last one)."""
+        from ..core.solve.path import warm_startable
 
-    def start(self, frame: int, percent: float) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """Start of a new frame's solve: the nearest solved frame, extrapolated linearly in the fold percent from it
-        and the solved frame next to it on the other side (a predictor along the folding path; Newton corrects),
-        when the step is no longer than theirs. Flat (None) with nothing solved yet."""
-        if not self.frames:
+        solver = self.solver(props)
+        step = solver.settings.continuation_step
+        key = settings_key(props)
+        usable = sorted(
+            (e.percent, e)
+            for e in self.frames.values()
+            if e.settings == key and warm_startable(e.percent, percent, step)
+        )
+        if not usable:
+            same = {f: e for f, e in self.frames.items() if e.settings == key}
+            if fallback and same and solver.path_state(percent) is None:
+                near = same[min(same, key=lambda f: (abs(f - frame), f))]
+                return near.positions, near.theta
             return None, None
-        f1 = min(self.frames, key=lambda f: (abs(f - frame), f))
-        near = self.frames[f1]
-        behind = [f for f in self.frames if f != f1 and (f - f1) * (frame - f1) < 0]
-        if not behind:
+        q, near = usable[-1]
+        if len(usable) > 1:
+            other = usable[-2][1]
+            before = (other.percent, other.positions, other.theta)
+        else:
+            before = solver.path_state(percent)
+        if before is None or before[0] == q:
             return near.positions, near.theta
-        other = self.frames[min(behind, key=lambda f: abs(f - f1))]
-        step = near.percent - other.percent
-        s = (percent - near.percent) / step if step != 0 else 0.0
-        if not 0.0 < s <= 1.0 or other.settings != near.settings:
+        s = (percent - q) / (q - before[0])
+        if not 0.0 < s <= 1.0:
             return near.positions, near.theta
-        return near.positions + s * (near.positions - other.positions), near.theta + s * (near.theta - other.theta)
+        return near.positions + s * (near.positions - before[1]), near.theta + s * (near.theta - before[2])
 
     def solve_steps(
-        self, frame: int, percent: float, props, *, frame_index: int = 0, n_frames: int = 0
+        self,
+        frame: int,
+        percent: float,
+        props,
+        *,
+        frame_index: int = 0,
+        n_frames: int = 0,
+        path_budget: int | None = FRAME_MAX_ITERATIONS,
     ) -> Generator[jobs.Progress, None, CachedFrame]:
-        """Solve ``frame`` at ``percent`` from the nearest solved frame (or flat), one Newton iteration per unit;
-        caches and returns the frame. A new solver's model and Hessian structure are units of their own (~300 ms
-        in one unit at 3,000 faces before: the longest slice of a bake)."""
+        """Solve ``frame`` at ``percent`` warm from a solved frame (:meth:`start`) in at most
+        :data:`FRAME_MAX_ITERATIONS`, or from the natural path in at most ``path_budget`` (``None``: the solver's
+        whole budget, as a static fold — bakes; playback keeps the frame's cap, and a path state it cuts short is
+        not kept), one Newton iteration per unit; caches and returns the frame. A new solver's model and Hessian
+        structure are units of their own (~300 ms in one unit at 3,000 faces before: the longest slice of a
+        bake)."""
         new_solver = settings_key(props) not in self._solvers
         solver = self.solver(props)
         if new_solver:
@@ -145,8 +173,9 @@ class FrameCache:
             if solver.method != "faithful":  # the ordering in units, the structure, then the scatter indices
                 yield from as_units(solver.prepare_steps(), built)
                 yield built
-        start, theta = self.start(frame, percent)
-        steps = solver.solve_steps(percent, start=start, theta_prev=theta)
+        start, theta = self.start(frame, percent, props, fallback=path_budget is not None)
+        budget = path_budget if start is None else FRAME_MAX_ITERATIONS
+        steps = solver.solve_steps(percent, start=start, theta_prev=theta, max_iterations=budget)
         while True:
             try:
                 p = next(steps)
@@ -160,8 +189,9 @@ class FrameCache:
                 yield jobs.Progress("solve", p.iteration, p.residual, positions=p.positions)
         if not np.all(np.isfinite(r.positions)):
             raise FloatingPointError(f"frame {frame}: the solver returned non-finite positions")
+        iterations = r.iterations - r.reused_iterations  # this frame's, not those of the kept path states
         entry = CachedFrame(
-            float(percent), settings_key(props), r.positions, r.theta, r.iterations, r.converged, r.residual
+            float(percent), settings_key(props), r.positions, r.theta, iterations, r.converged, r.residual
         )
         self.frames[int(frame)] = entry
         return entry
@@ -215,8 +245,8 @@ def driven(ob: bpy.types.Object) -> bool:
 
 
 def fold_to_frame(ob: bpy.types.Object, frame: int, *, scene=None) -> CachedFrame:
-    """Fold ``ob`` to ``frame``'s percent (from the cache, or solved warm from the nearest cached frame), write the
-    positions and return the frame."""
+    """Fold ``ob`` to ``frame``'s percent (from the cache, or solved warm from a cached frame or from the natural
+    path, :meth:`FrameCache.start`), write the positions and return the frame."""
     cache = cache_for(ob)
     props = ob.curved_fold_mesh
     percent = percent_at(ob, frame)

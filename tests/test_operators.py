@@ -245,17 +245,26 @@ def test_bake_ten_frames_matches_solver(folded, extension):
     bake_mod = mod(extension, "scene.bake")
     fcurves = bake_mod._fcurves(ob.data.shape_keys)
     assert len(fcurves) == 10 and all(1 <= len(fc.keyframe_points) <= 3 for fc in fcurves)
-    # Each frame is the timeline cache's frame, and equals a cold solve at its percent (ramp 0 → 100 %).
+    # Each frame is the timeline cache's frame, and equals a cold solve at its percent (ramp 0 → 100 %); a frame
+    # solved from the natural path (the first, and each after a grid point of the path) is the static fold exactly.
     cache = mod(extension, "scene.timeline").cache_for(ob)
     solver_mod = mod(extension, "core.solve.solver")
+    warm_startable = mod(extension, "core.solve.path").warm_startable
     mesh = cache.mesh
     diag = float(np.linalg.norm(np.ptp(mesh.vertices_3d, axis=0)))
+    previous, from_path = None, 0
     for f, pct in zip(range(1, 11), np.linspace(0, 1, 10), strict=True):
         scene.frame_set(f)
         np.testing.assert_allclose(evaluated_mm(ob), cache.frames[f].positions, atol=5e-3)
         assert cache.frames[f].percent == pytest.approx(pct)
         cold = solver_mod.Solver(mesh).solve(pct).positions
         assert solver_mod.rigid_rms(cache.frames[f].positions, cold) / diag <= 1e-4
+        if not warm_startable(previous, cache.frames[f].percent, 0.25):  # (props' float32 stiffnesses)
+            static = solver_mod.Solver(mesh, cache.solver(ob.curved_fold_mesh).settings).solve(pct).positions
+            assert np.array_equal(cache.frames[f].positions, static), f
+            from_path += 1
+        previous = cache.frames[f].percent
+    assert from_path == 5  # 0 %, then the frames after 25, 50 and 75 %, and 11 % (one frame from the flat sheet)
     assert bpy.ops.curved_fold.clear_bake() == {"FINISHED"}
     assert ob.data.shape_keys is None
 

@@ -53,3 +53,52 @@ def test_predictor_frames_match_cold_solves_and_survive_reversal():
         assert f.converged
     cold = solve(mesh, 0.2, "fast", SolverSettings(tolerance=1e-8))
     assert rigid_rms(f.positions, cold.positions) / mesh.diagonal < 1e-5
+
+
+def test_natural_path_grid_and_which_frames_may_warm_start():
+    """The path's grid does not move with the fold percent; a frame warm-starts only a small step forward within
+    one grid step, else it is solved from the path."""
+    from curved_fold.core.solve.path import grid_below, steps_to, warm_startable
+
+    assert [steps_to(p, 0.25) for p in (0.0, 0.1, 0.25, 0.26, 0.6, 1.0)] == [1, 1, 1, 2, 3, 4]
+    assert grid_below(0.6, 0.25) == 0.5 and grid_below(0.5, 0.25) == 0.25 and grid_below(0.2, 0.25) == 0.0
+    assert grid_below(-0.6, 0.25) == -0.5
+    assert warm_startable(0.54, 0.6, 0.25)  # same cell, small step
+    assert not warm_startable(0.48, 0.6, 0.25)  # a grid point (0.5) crossed
+    assert not warm_startable(0.5, 0.6, 0.25)  # the frame at the grid point is not the path's state there
+    assert not warm_startable(0.8, 1.0, 0.25)  # a jump of 20 %: from the path
+    assert not warm_startable(0.6, 0.55, 0.25)  # backwards
+    assert not warm_startable(None, 0.3, 0.25)
+    assert warm_startable(-0.54, -0.6, 0.25) and not warm_startable(0.54, -0.6, 0.25)
+
+
+def test_a_fold_from_the_kept_path_equals_a_fresh_one_and_reports_the_same_counts():
+    """The solver keeps the path's grid states: a second fold (or an animation frame solved from the path) reuses
+    them, runs only its last step, and reports the same state and counts as a fresh solver."""
+    from curved_fold.core.solve.solver import Solver
+
+    mesh = crease_grid()
+    fresh = Solver(mesh, SolverSettings()).solve(0.9)
+    solver = Solver(mesh, SolverSettings())
+    solver.solve(0.6)  # computes and keeps the grid states at 25 % and 50 %
+    again = solver.solve(0.9)
+    assert again.reused_iterations > 0 and fresh.reused_iterations == 0
+    assert np.array_equal(again.positions, fresh.positions)
+    assert (again.iterations, again.force_evaluations, again.continuation_steps) == (
+        fresh.iterations,
+        fresh.force_evaluations,
+        fresh.continuation_steps,
+    )
+
+
+def test_frames_that_jump_are_the_static_fold_at_their_percent():
+    """A frame solved from the natural path (the first, a jump, a grid point crossed, a step back) is the static fold
+    at its percent, bit for bit, whatever frames came before."""
+    from curved_fold.core.solve.solver import Solver
+
+    mesh = crease_grid()
+    anim = FoldAnimation(mesh, SolverSettings())
+    for p in (0.1, 0.15, 0.2, 0.3, 0.7, 0.4):
+        f = anim.frame(p)
+        if p in (0.1, 0.3, 0.7, 0.4):
+            assert np.array_equal(f.positions, Solver(mesh, SolverSettings()).solve(p).positions)

@@ -2,11 +2,14 @@
 
 Two modes:
 
-* ``"quasi_static"`` — equilibrium per frame with the fast solver, warm-started from the last positions and fold
-  angles (θ history, so hinges keep unwrapping past ±180°). After two frames the start is extrapolated linearly in
-  the fold percent from the last two equilibria (a predictor along the folding path; the Newton solve is the
-  corrector), limited to steps no larger than the last one. A 0 → 100 % jump is safe: Newton steps are capped and
-  line-searched.
+* ``"quasi_static"`` — equilibrium per frame with the fast solver. A frame a small step after the last one (between
+  the same two grid points of the natural path, :func:`.path.warm_startable`) is warm-started from the last
+  positions and fold angles (θ history, so hinges keep unwrapping past ±180°), extrapolated linearly in the fold
+  percent from the last two equilibria (a predictor along the folding path; the Newton solve is the corrector),
+  limited to steps no larger than the last one. Any other frame (the first, a jump, a grid point crossed, a step
+  back) is solved from the natural path like a static fold (:meth:`.Solver.fold_steps`, whose grid states the
+  solver keeps): it *is* the static fold at its percent, so the last frame of an animation equals the static fold
+  where a pattern has several equilibria.
 * ``"dynamic"`` — Origami Simulator's behaviour: ``steps_per_frame`` explicit steps per frame with velocities carried
   over (no convergence test), like the app's 100 steps per rendered frame.
 """
@@ -19,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh
+from .path import warm_startable
 from .solver import Solver, SolverSettings
 
 
@@ -73,9 +77,13 @@ class FoldAnimation:
         """Advance to fold percent ``percent`` (1.0 = 100 %) and return the frame."""
         t0 = time.perf_counter()
         if self.mode == "quasi_static":
-            start, theta = self._predict(percent)
-            r = self.solver.solve(percent, start=start, theta_prev=theta)
-            self._previous = (self.percent, self.positions, self.theta) if self.percent is not None else None
+            if warm_startable(self.percent, percent, self.solver.settings.continuation_step):
+                start, theta = self._predict(percent)
+                r = self.solver.solve(percent, start=start, theta_prev=theta)
+                self._previous = (self.percent, self.positions, self.theta)
+            else:  # from the natural path; its state at the grid point before is the predictor's next anchor
+                r = self.solver.solve(percent)
+                self._previous = self.solver.path_state(percent)
             self.percent = float(percent)
         else:
             r = self.solver.solve(
@@ -88,6 +96,7 @@ class FoldAnimation:
             )
             self.velocities = r.velocities
         self.positions, self.theta = r.positions, r.theta
+        iterations = r.iterations - r.reused_iterations  # this frame's, not those of the kept path states
         return FrameResult(
-            r.positions, r.fold_angles, r.iterations, (time.perf_counter() - t0) * 1000.0, r.converged, r.residual
+            r.positions, r.fold_angles, iterations, (time.perf_counter() - t0) * 1000.0, r.converged, r.residual
         )

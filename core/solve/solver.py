@@ -23,6 +23,7 @@ import numpy as np
 from .. import as_units, run_to_end
 from ..mesh.fold_mesh import FoldMesh
 from ..pattern.model import PatternError
+from . import path
 from .constraints import GLUE_STIFFNESS, Constraints, rigid_fit
 from .dissection import NestedDissection, dissect_pairs_steps
 from .faithful import SolverError, faithful_solve, time_step
@@ -106,6 +107,9 @@ class FoldResult:
     continuation_steps: int = 0
     negative_pivots: int | None = None
     saddle_percents: list[float] = field(default_factory=list)
+    reused_iterations: int = 0
+    """Iterations of the natural path's grid states taken from the solver's kept ones (counted in ``iterations``,
+    not run again by this solve)."""
 
     @property
     def ms(self) -> float:
@@ -271,16 +275,22 @@ class Solver:
             raise ValueError("a continuation starts from the flat sheet: give no start positions")
         return start is None if continuation is None else bool(continuation)
 
-    def fold_steps(self, percent: float = 1.0) -> Generator[SolveProgress, None, FoldResult]:
+    def fold_steps(
+        self, percent: float = 1.0, max_iterations: int | None = None
+    ) -> Generator[SolveProgress, None, FoldResult]:
         """Fold from the flat sheet along the path paper takes: continuation in the fold percent, sliced.
 
-        ``n = ⌈|percent| / continuation_step⌉`` equal steps, each a Newton solve warm-started from the last state
-        (extrapolated linearly in the percent from the last two, as the quasi-static animation does), the
-        intermediate ones to ``continuation_tolerance``, the last to ``tolerance``. Which of several equilibria a
-        pattern reaches is then decided by the folding path, not by the first steps of one solve from the flat
-        sheet: a static fold at P is the last frame of a 0 → P animation, deterministic (the solver's cached
-        damping is reset first). At the end the exact Hessian's inertia is measured
-        (``negative_pivots``: 0 for a stable minimum). Yields a :class:`SolveProgress` per Newton iteration.
+        The natural path (:mod:`.path`): Newton solves at the fixed grid points ``±k · continuation_step`` up to the
+        last one before ``percent``, then at ``percent``; each warm-started from the last state (extrapolated
+        linearly in the percent from the last two, as the quasi-static animation does), the grid states to
+        ``continuation_tolerance``, the last to ``tolerance``. Which of several equilibria a pattern reaches is then
+        decided by the folding path, not by the first steps of one solve from the flat sheet: a static fold at P is
+        the frame at P of any animation solved from the same path (:func:`.path.warm_startable`), deterministic
+        (the solver's damping is restored from the path, tested bit-identical). The grid states are kept
+        (:meth:`path_state`): a later fold or frame continues from them and reports the same counts as a fresh
+        solve. At the end the exact Hessian's inertia is measured (``negative_pivots``: 0 for a stable minimum).
+        Yields a :class:`SolveProgress` per Newton iteration. ``max_iterations`` (default the settings') caps the
+        whole path; a grid state is kept only if it converged, so a capped fold never changes the path.
 
         Pins that only hold one triangle (:meth:`.Constraints.holds_pose_only`: a corner on the table) choose the
         pose, not the shape: the path is then folded free, each state shown posed on the pins, and the last one is
@@ -290,18 +300,19 @@ class Solver:
         s = self.settings
         model = self.model
         t0 = time.perf_counter()
-        self.lm_lambda = 1e-3
-        n = max(1, int(np.ceil(abs(float(percent)) / max(s.continuation_step, 1e-6) - 1e-9)))
-        x, theta = self._start(None, None, float(percent) / n)  # the flat sheet (pins placed, if any)
+        percent = float(percent)
+        n = path.steps_to(percent, s.continuation_step)
         anchor = self.constraints is not None and self.constraints.holds_pose_only(self.mesh)
-        previous: tuple[float, np.ndarray, np.ndarray] | None = None
-        last_p = 0.0
+        first = percent if n == 1 else path.grid_point(1, percent, s.continuation_step)
+        flat = path.PathState(0.0, *self._start(None, None, first), 1e-3, {})  # pins placed, if any
+        states = [flat]  # the path's states at grid points 0 … k
         totals = dict(iterations=0, evaluations=0, assemblies=0, solves=0, exact=0, saddles=0)
-        saddle_percents: list[float] = []
+        reused = 0
 
         def stage(x0: np.ndarray, t_start: np.ndarray, p: float, tolerance: float, pinned: bool):
             """One Newton solve of the path, its iterations numbered on from the last and its counts added up."""
-            budget = max(s.max_iterations - totals["iterations"], 0)  # max_iterations caps the whole path
+            cap = s.max_iterations if max_iterations is None else max_iterations
+            budget = max(cap - totals["iterations"], 0)  # max_iterations caps the whole path
             steps = self._fast_steps(
                 x0, t_start, p, t0, tolerance=tolerance, max_iterations=budget, check_minimum=True, pinned=pinned
             )
@@ -319,39 +330,73 @@ class Solver:
             totals["solves"] += r.linear_solves
             totals["exact"] += r.exact_iterations
             totals["saddles"] += r.saddle_escapes
-            if r.saddle_escapes:
-                saddle_percents.append(p)
             return r
 
+        def predicted(p: float) -> tuple[np.ndarray, np.ndarray]:
+            """The start of the solve at ``p``: the last state, extrapolated from the last two (a predictor)."""
+            last = states[-1]
+            if len(states) < 2:
+                return last.x, last.theta
+            before = states[-2]
+            frac = (p - last.percent) / (last.percent - before.percent)
+            return last.x + frac * (last.x - before.x), last.theta + frac * (last.theta - before.theta)
+
         for k in range(1, n + 1):
-            p = float(percent) * k / n
-            x0, t_start = x, theta
-            if previous is not None:  # the last two states extrapolated to p (a predictor, Newton corrects)
-                p_prev, x_prev, theta_prev = previous
-                frac = (p - last_p) / (last_p - p_prev)
-                x0, t_start = x + frac * (x - x_prev), theta + frac * (theta - theta_prev)
+            p = percent if k == n else path.grid_point(k, percent, s.continuation_step)
+            kept = self._path.get(p) if k < n else None
+            if kept is not None and kept.percent == p:
+                states.append(kept)
+                totals = dict(kept.totals)
+                reused = kept.totals["iterations"]
+                continue
+            x0, t_start = predicted(p)
+            self.lm_lambda = states[-1].lm_lambda
             tolerance = s.tolerance if k == n else max(s.tolerance, s.continuation_tolerance)
             r = yield from stage(x0, t_start, p, tolerance, pinned=not anchor)
-            previous, last_p = (last_p, x, theta), p
-            x, theta = model.from_mm(r.positions), r.theta
+            saddles = states[-1].saddle_percents + ([p] if r.saddle_escapes else [])
+            state = path.PathState(p, model.from_mm(r.positions), r.theta, self.lm_lambda, dict(totals), saddles)
+            states.append(state)
+            if k < n and r.converged and s.time_limit is None:  # a state cut short by the clock is not the path
+                self._path[p] = state
+        x, theta = states[-1].x, states[-1].theta
         if anchor:  # the free fold posed on the pins, then held by them
             posed = self.constraints.pose(r.positions, self.mesh.vertices_3d, exact=True)
-            r = yield from stage(model.from_mm(posed), theta, float(percent), s.tolerance, pinned=True)
+            r = yield from stage(model.from_mm(posed), theta, percent, s.tolerance, pinned=True)
             x, theta = model.from_mm(r.positions), r.theta
         with single_threaded_blas():
-            negative = self.negative_pivots(x, theta, float(percent))
+            negative = self.negative_pivots(x, theta, percent)
         r.iterations = totals["iterations"]
         r.force_evaluations = totals["evaluations"]
         r.hessian_assemblies = totals["assemblies"] + 1
         r.linear_solves = totals["solves"]
         r.exact_iterations = totals["exact"]
         r.saddle_escapes = totals["saddles"]
-        r.saddle_percents = saddle_percents
+        r.saddle_percents = states[-1].saddle_percents
         r.continuation_steps = n
+        r.reused_iterations = reused
         r.negative_pivots = negative
         r.simulation_ms = (time.perf_counter() - t0) * 1000.0
         r.message = f"{r.message} (continuation from the flat sheet in {n} fold-percent steps)"
         return r
+
+    @property
+    def _path(self) -> dict[float, path.PathState]:
+        """The natural path's states at grid points (see :meth:`fold_steps`), for the current settings and pins."""
+        key = (repr(self.settings), id(self.constraints))
+        if getattr(self, "_path_key", None) != key:
+            self._path_key, self._path_states = key, {}
+        return self._path_states
+
+    def path_state(self, percent: float) -> tuple[float, np.ndarray, np.ndarray] | None:
+        """``(grid point, positions mm, θ)`` of the natural path's state at the last grid point before ``percent``
+        (the flat sheet within the first step), if it has been computed: the predictor's second point for a frame
+        solved from the path."""
+        g = path.grid_below(percent, self.settings.continuation_step)
+        if g == 0.0:
+            x, theta = self._start(None, None, percent)
+            return 0.0, self.model.to_mm(x), theta
+        kept = self._path.get(g)
+        return None if kept is None else (g, self.model.to_mm(kept.x), kept.theta)
 
     def _posed(self, positions: np.ndarray) -> np.ndarray:
         """Free-fold ``positions`` (mm) posed on the pins (:meth:`.Constraints.pose`, from the flat sheet)."""
@@ -382,19 +427,25 @@ class Solver:
         start: np.ndarray | None = None,
         theta_prev: np.ndarray | None = None,
         continuation: bool | None = None,
+        max_iterations: int | None = None,
     ) -> Generator[SolveProgress, None, FoldResult]:
         """The fast solve of :meth:`solve`, one Newton iteration per ``next``: yields a :class:`SolveProgress`
         (iteration, residual, positions in mm) after each, returns the :class:`FoldResult` (``StopIteration.value``).
 
         For callers that work in slices and may stop between any two iterations (Blender's modal jobs); the result
-        equals :meth:`solve`'s. Only the fast methods step this way (the faithful one is sliced by ``max_steps``)."""
+        equals :meth:`solve`'s. Only the fast methods step this way (the faithful one is sliced by ``max_steps``).
+        ``max_iterations`` caps this solve (default: the settings'), e.g. a timeline frame."""
         if self.method == "faithful":
             raise ValueError("solve_steps steps the fast solver; slice the faithful one with solve(max_steps=...)")
         if self._continues(start, continuation):
-            return (yield from self.fold_steps(percent))
+            return (yield from self.fold_steps(percent, max_iterations))
         t0 = time.perf_counter()
         x0, theta_prev = self._start(start, theta_prev, percent)
-        return (yield from self._fast_steps(x0, theta_prev, percent, t0, check_minimum=start is None))
+        return (
+            yield from self._fast_steps(
+                x0, theta_prev, percent, t0, max_iterations=max_iterations, check_minimum=start is None
+            )
+        )
 
     def _start(self, start: np.ndarray | None, theta_prev: np.ndarray | None, percent: float):
         model = self.model

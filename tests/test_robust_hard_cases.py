@@ -250,19 +250,14 @@ def test_faithful_solver_capped_run_says_so() -> None:
     assert "residual" in result.message
 
 
-def test_a_fold_that_presses_a_triangle_flat_converges(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A pattern of the fuzz run (seed 7; 57 faces, its discretised arrays in tests/data/fuzz_flat_triangle.json):
-    the fold presses a 175.7° triangle flat, whose long side is a crease (no flip can remove it). With a hinge
-    stiffness that only fades towards the hinge line, the flat triangle's last stiffness turned its plane about the
-    line by ~0.25° per iteration and the fold crawled to the 500-iteration budget; a triangle pressed below
-    ``model.FLAT_DEAD`` of its fading scale has no hinge stiffness, and the fold converges to a minimum."""
+def _stored_pattern(name: str):
+    """A discretised crease pattern kept as its arrays in tests/data/``name`` (patterns found by the fuzz runs)."""
     import json
 
-    import curved_fold.core.solve.forces as forces
     from curved_fold.core.pattern.model import CreasePattern
 
-    d = json.loads((Path(__file__).resolve().parent / "data" / "fuzz_flat_triangle.json").read_text())
-    pattern = CreasePattern(
+    d = json.loads((Path(__file__).resolve().parent / "data" / name).read_text())
+    return CreasePattern(
         vertices=np.array(d["vertices"]),
         edges=np.array(d["edges"]),
         assignments=np.array(d["assignments"]),
@@ -271,7 +266,35 @@ def test_a_fold_that_presses_a_triangle_flat_converges(monkeypatch: pytest.Monke
         edge_from_curve=np.array(d["edge_from_curve"]),
         sources=d["sources"],
     )
+
+
+def test_a_fold_that_presses_a_triangle_flat_converges(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A pattern of the fuzz run (seed 7; 57 faces, its discretised arrays in tests/data/fuzz_flat_triangle.json):
+    the fold presses a 175.7° triangle flat, whose long side is a crease (no flip can remove it). With a hinge
+    stiffness that only fades towards the hinge line, the flat triangle's last stiffness turned its plane about the
+    line by ~0.25° per iteration and the fold crawled to the 500-iteration budget; a triangle pressed below
+    ``model.FLAT_DEAD`` of its fading scale has no hinge stiffness, and the fold converges to a minimum."""
+    import curved_fold.core.solve.forces as forces
+
+    pattern = _stored_pattern("fuzz_flat_triangle.json")
     report = check_stable(fold_pattern(pattern, angle=90.0), max_iterations=150)
     assert report["converged"] and report["negative_pivots"] == 0, report["message"]
     monkeypatch.setattr(forces, "FLAT_DEAD", 0.0)  # fading to the line itself: the crawl
     assert not fold_pattern(pattern, angle=90.0).report["converged"]
+
+
+def test_a_path_step_that_stalls_is_taken_again_in_halves(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A pattern of a fuzz run (seed 7; 507 faces, 1 mm across, a 179° valley and a −93° one crossing 90° creases;
+    its arrays in tests/data/fuzz_stalled_step.json): from the state at 75 %, the one Newton solve to 100 % lands
+    where a mountain crease's wing, a 174° triangle, is pressed onto its hinge line and stalls ("no descent step",
+    residual 2.4e2). The stage is taken again in two halves (75 → 87.5 → 100 %) and converges; with no halving
+    (``path.MAX_HALVINGS = 0``) it stalls as before."""
+    from curved_fold.core.solve import path
+
+    pattern = _stored_pattern("fuzz_stalled_step.json")
+    report = fold_pattern(pattern, angle=90.0).report
+    assert report["converged"] and report["negative_pivots"] == 0, report["message"]
+    assert "halved" in report["message"]
+    monkeypatch.setattr(path, "MAX_HALVINGS", 0)
+    stalled = fold_pattern(pattern, angle=90.0).report
+    assert not stalled["converged"] and stalled["message"].startswith("stalled")

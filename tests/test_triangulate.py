@@ -268,3 +268,56 @@ def test_pattern_without_border_enclosing_nothing_is_refused_in_one_line(body: s
     pattern = discretize(parse_svg_text(svg, "t.svg").curves)
     with pytest.raises(PatternError, match=r"crease pattern has no border \(B\) segments: .* enclose no region"):
         build_mesh(pattern, "ruling")
+
+
+def _fuzz_flip_cycle_pattern():
+    """A fuzzed pattern (tools/fuzz_long.py, seed 1, 1,000 examples): a Bézier border and two straight creases
+    that cross it, whose near-cocircular nodes made the tolerance's Lawson flips go round a cycle."""
+    from curved_fold.core.pattern.discretize import discretize
+    from curved_fold.core.pattern.model import CreaseCurve, CurveSegment
+
+    border = [
+        [[84.2148580368414, 118.9122796333025], [57.51515402256985, 100.52975845955464]],
+        [[32.78451530976501, 79.79832830077599], [10.022941898426893, 56.71798915696655]],
+        [[47.10728616402053, 46.43184651791864], [84.19162859030735, 36.14569724767356]],
+        [[121.27596917728735, 25.859541346231303], [114.79492769119412, 42.240881494147594]],
+        [[108.31088690952875, 58.621034378737164], [101.82384683229127, 75.00000000000001]],
+        [[114.21958089028098, 96.96191922902756], [108.34991795846436, 111.59934577346172]],
+    ]
+    pts = [p for pair in border for p in pair] + [border[0][0]]
+    segs = [CurveSegment("cubic", np.array(pts[3 * k : 3 * k + 4], dtype=float)) for k in range(4)]
+    line = lambda a, b: [CurveSegment("line", np.array([a, b], dtype=float))]  # noqa: E731
+    return discretize(
+        [
+            CreaseCurve(segs, "B", None, closed=True, source="fuzz border (bezier)"),
+            CreaseCurve(line([-14.9982, 89.99554032166103], [75.40244615960847, -11.820838252027901]), "M", -102.9),
+            CreaseCurve(line([19.808598421852455, 9.017779105111774], [152.67962865055426, -14.982]), "V", -2.54),
+        ]
+    )
+
+
+def test_delaunay_flips_that_cycle_under_the_tolerance_are_redone_exactly(monkeypatch) -> None:
+    """The tolerance's flips cycle on this input (they raised "Delaunay legalisation did not terminate", a
+    RuntimeError that reached the user); the pass is redone with exact predicates: it terminates, and every edge
+    that is not a segment is then locally Delaunay exactly."""
+    from fractions import Fraction
+
+    from curved_fold.core.mesh import triangulate as tr
+
+    seen = []
+    real = tr.legalise
+    monkeypatch.setattr(tr, "legalise", lambda *args: seen.append(args) or real(*args))
+    mesh = build_mesh(_fuzz_flip_cycle_pattern(), mesh_type="cdt")
+    assert mesh.n_faces > 0
+    points, tris, constrained = seen[0]
+    with pytest.raises(tr._FlipCycleError):
+        tr._lawson(points, tris, constrained, exact=False)
+    out, _ = tr.legalise(points, tris, constrained)
+    fr = [(Fraction(x), Fraction(y)) for x, y in points.tolist()]
+    owner = {(int(t[k]), int(t[(k + 1) % 3])): int(t[(k + 2) % 3]) for t in out for k in range(3)}
+    for (a, b), c in owner.items():
+        d = owner.get((b, a))
+        if d is None or (min(a, b), max(a, b)) in constrained:
+            continue
+        val = tr._incircle_exact(fr[a], fr[b], fr[c], fr[d])
+        assert val < 0 or (val == 0 and min(c, d) > min(a, b)), (a, b)

@@ -32,6 +32,7 @@ region breadth-first search and the chaining of boundary half-edges into loops.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
@@ -211,7 +212,29 @@ def legalise(points: np.ndarray, tris: np.ndarray, constrained: set[tuple[int, i
     smallest vertex index of the quad. Returns the new triangles and the number of flips. Every interior edge is
     screened at once on half-edge arrays; the Python flip loop only runs over the (usually few) edges that are not
     clearly Delaunay (ties and offenders) and the neighbours of the flips it makes.
+
+    The tolerance makes near-cocircular points (a circle's nodes) a canonical fan whatever the backend gave, but it
+    is not a consistent order: among several nearly cocircular points some quads fall just outside it (decided by
+    geometry) and some inside (by index), and the two can disagree round a cycle — a fuzzed Bézier border with two
+    creases flipped the same edges for ever ("did not terminate", a RuntimeError that reached the user). When the
+    flips exceed their bound the pass is run again from the backend's triangles with exact predicates (rational
+    arithmetic on the float coordinates; a tie is then an exact zero, decided by index), for which Lawson's
+    flips terminate. Meshes that never cycled are unchanged.
     """
+    try:
+        return _lawson(points, tris, constrained, exact=False)
+    except _FlipCycleError:
+        return _lawson(points, tris, constrained, exact=True)
+
+
+class _FlipCycleError(Exception):
+    """Lawson flips beyond their bound: the tolerance's decisions went round a cycle."""
+
+
+def _lawson(
+    points: np.ndarray, tris: np.ndarray, constrained: set[tuple[int, int]], exact: bool
+) -> tuple[np.ndarray, int]:
+    """:func:`legalise`'s flips, with the tolerance or (``exact``) with exact predicates."""
     tris = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
     n = len(points)
     empty = np.zeros(0, dtype=np.int64)
@@ -222,12 +245,13 @@ def legalise(points: np.ndarray, tris: np.ndarray, constrained: set[tuple[int, i
         return tris, 0
     ca, cb, cc, cd = org[cand], dst[cand], opp[cand], opp[twin[cand]]
     val = incircle(points[ca], points[cb], points[cc], points[cd])
-    pick = np.flatnonzero(val >= -_TIE_TOLERANCE)
+    pick = np.flatnonzero(val >= (-1e-6 if exact else -_TIE_TOLERANCE))  # exact: screen generously
     if len(pick) == 0:
         return tris, 0
     stack = list(zip(ca[pick].tolist(), cb[pick].tolist(), strict=True))
 
     xy = points.tolist()
+    fr = [(Fraction(x), Fraction(y)) for x, y in xy] if exact else []
     tris_l = tris.tolist()
     owner: dict[tuple[int, int], int] = {}
     for ti, (a, b, c) in enumerate(tris_l):
@@ -248,6 +272,12 @@ def legalise(points: np.ndarray, tris: np.ndarray, constrained: set[tuple[int, i
             return False
         c, d = third(t1, a, b), third(t2, b, a)
         pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
+        if exact:
+            pa, pb, pc, pd = fr[a], fr[b], fr[c], fr[d]
+            if _orient2(pc, pa, pd) <= 0 or _orient2(pd, pb, pc) <= 0:
+                return False
+            val = _incircle_exact(pa, pb, pc, pd)
+            return val > 0 or (val == 0 and min(c, d) < min(a, b))
         # the quad a, d, b, c must be strictly convex: both new triangles (c, a, d), (d, b, c) counter-clockwise
         if _orient2(pc, pa, pd) <= 0 or _orient2(pd, pb, pc) <= 0:
             return False
@@ -269,8 +299,10 @@ def legalise(points: np.ndarray, tris: np.ndarray, constrained: set[tuple[int, i
         if not wants_flip(a, b):
             continue
         flips += 1
-        if flips > limit:  # pragma: no cover - Lawson flips terminate; guard against tolerance cycles
-            raise RuntimeError("triangulation: Delaunay legalisation did not terminate")
+        if flips > limit:  # the tolerance's decisions cycle (see legalise); exact predicates terminate
+            if exact:  # pragma: no cover - Lawson's flips with exact predicates terminate
+                raise RuntimeError("triangulation: Delaunay legalisation did not terminate")
+            raise _FlipCycleError
         t1, t2 = owner[(a, b)], owner[(b, a)]
         c, d = third(t1, a, b), third(t2, b, a)
         for e in ((a, b), (b, c), (c, a), (b, a), (a, d), (d, b)):
@@ -284,6 +316,18 @@ def legalise(points: np.ndarray, tris: np.ndarray, constrained: set[tuple[int, i
             owner[(z, x)] = ti
         stack += [(a, d), (d, b), (b, c), (c, a)]
     return np.asarray(tris_l, dtype=np.int64).reshape(-1, 3), flips
+
+
+def _incircle_exact(a, b, c, d) -> Fraction:
+    """The in-circle determinant of ``d`` against CCW ``(a, b, c)`` in exact rational arithmetic (its sign only
+    matters: > 0 inside)."""
+    adx, ady = a[0] - d[0], a[1] - d[1]
+    bdx, bdy = b[0] - d[0], b[1] - d[1]
+    cdx, cdy = c[0] - d[0], c[1] - d[1]
+    adl = adx * adx + ady * ady
+    bdl = bdx * bdx + bdy * bdy
+    cdl = cdx * cdx + cdy * cdy
+    return adl * (bdx * cdy - bdy * cdx) - bdl * (adx * cdy - ady * cdx) + cdl * (adx * bdy - ady * bdx)
 
 
 def _orient2(a: list[float], b: list[float], c: list[float]) -> float:

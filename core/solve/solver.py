@@ -341,6 +341,25 @@ class Solver:
             frac = (p - last.percent) / (last.percent - before.percent)
             return last.x + frac * (last.x - before.x), last.theta + frac * (last.theta - before.theta)
 
+        halved: list[float] = []
+
+        def reach(p: float, tolerance: float, halvings: int = 0):
+            """Solve at ``p`` from the last state, appending it to ``states``; a stage that stalls ("no descent
+            step") is taken again in two halves, up to :data:`path.MAX_HALVINGS` times."""
+            x0, t_start = predicted(p)
+            self.lm_lambda = states[-1].lm_lambda
+            r = yield from stage(x0, t_start, p, tolerance, pinned=not anchor)
+            if not r.converged and r.message.startswith("stalled") and halvings < path.MAX_HALVINGS:
+                halved.append(p)
+                mid = states[-1].percent + 0.5 * (p - states[-1].percent)
+                half = yield from reach(mid, max(s.tolerance, s.continuation_tolerance), halvings + 1)
+                if half.converged:
+                    return (yield from reach(p, tolerance, halvings + 1))
+                states.pop()  # the half did not help: report the stage as it stalled
+            saddles = states[-1].saddle_percents + ([p] if r.saddle_escapes else [])
+            states.append(path.PathState(p, model.from_mm(r.positions), r.theta, self.lm_lambda, dict(totals), saddles))
+            return r
+
         for k in range(1, n + 1):
             p = percent if k == n else path.grid_point(k, percent, s.continuation_step)
             kept = self._path.get(p) if k < n else None
@@ -349,15 +368,10 @@ class Solver:
                 totals = dict(kept.totals)
                 reused = kept.totals["iterations"]
                 continue
-            x0, t_start = predicted(p)
-            self.lm_lambda = states[-1].lm_lambda
             tolerance = s.tolerance if k == n else max(s.tolerance, s.continuation_tolerance)
-            r = yield from stage(x0, t_start, p, tolerance, pinned=not anchor)
-            saddles = states[-1].saddle_percents + ([p] if r.saddle_escapes else [])
-            state = path.PathState(p, model.from_mm(r.positions), r.theta, self.lm_lambda, dict(totals), saddles)
-            states.append(state)
+            r = yield from reach(p, tolerance)
             if k < n and r.converged and s.time_limit is None:  # a state cut short by the clock is not the path
-                self._path[p] = state
+                self._path[p] = states[-1]
         x, theta = states[-1].x, states[-1].theta
         if anchor:  # the free fold posed on the pins, then held by them
             posed = self.constraints.pose(r.positions, self.mesh.vertices_3d, exact=True)
@@ -376,7 +390,8 @@ class Solver:
         r.reused_iterations = reused
         r.negative_pivots = negative
         r.simulation_ms = (time.perf_counter() - t0) * 1000.0
-        r.message = f"{r.message} (continuation from the flat sheet in {n} fold-percent steps)"
+        halves = f", {len(halved)} halved after a stall" if halved else ""
+        r.message = f"{r.message} (continuation from the flat sheet in {n} fold-percent steps{halves})"
         return r
 
     @property

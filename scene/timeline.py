@@ -3,11 +3,12 @@ to that frame's percent — the design's "solver stepped per frame".
 
 * :class:`FrameCache` (one per fold object) keeps every solved frame (fold percent, settings, positions, θ
   history). A new frame a small step after a solved one warm-starts from it (extrapolated in the fold percent), so
-  playback costs a few Newton iterations per frame (at most :data:`FRAME_MAX_ITERATIONS`); any other frame is
-  solved from the natural path (``core.solve.path``), whose grid states the frame cache's solver keeps, and is then
-  the static fold at its percent (a bake gives it the whole iteration budget). The cache is dropped when the
-  stored mesh changes (re-fold, live edit) and its entries are not reused when the solver settings differ. Bakes
-  read it and fill it (``bake.bake_job``): a converged frame is solved once.
+  playback costs a few Newton iterations per frame (at most :data:`FRAME_MAX_ITERATIONS`). In a bake any other
+  frame is solved from the natural path (``core.solve.path``, whose grid states the frame cache's solver keeps) with
+  the whole iteration budget, and is then the static fold at its percent; playback warm-starts it from the nearest
+  solved frame instead (synchronous and capped, it cannot afford a path step), the first frame from the path.
+  The cache is dropped when the stored mesh changes (re-fold, live edit) and its entries are not reused when the
+  solver settings differ. Bakes read it and fill it (``bake.bake_job``): a converged frame is solved once.
 * :func:`on_frame_change` (``frame_change_post``) folds each animated fold object that is not showing a current
   bake and has no job running. It is synchronous, as Blender needs the frame's shape before it draws or renders it.
 
@@ -115,9 +116,10 @@ class FrameCache:
         linearly in the fold percent from it and the equilibrium before it on the path (an earlier such frame, else
         the path's grid state), when the step is no longer than theirs. ``(None, None)`` when no frame may: the frame
         is then solved from the natural path, as a static fold is (so it is the static fold at its percent) — unless
-        ``fallback`` (playback, capped per frame) and the path's grid state before ``percent`` is not kept yet: then
-        the nearest solved frame is the start, as before the natural path (a capped solve of the path from the flat
-        sheet would show a frame far behind the last one)."""
+        ``fallback`` (playback, capped at :data:`FRAME_MAX_ITERATIONS` per frame, synchronous) and a frame is solved:
+        then the nearest solved frame is the start, as before the natural path (a path step from the last grid point
+        may need more than the cap — CircularPleat from the flat sheet to 10 % needs ~20 — and would show a frame
+        short of its shape; a bake folds such frames along the path with the whole budget)."""
         from ..core.solve.path import warm_startable
 
         solver = self.solver(props)
@@ -130,7 +132,7 @@ class FrameCache:
         )
         if not usable:
             same = {f: e for f, e in self.frames.items() if e.settings == key}
-            if fallback and same and solver.path_state(percent) is None:
+            if fallback and same:
                 near = same[min(same, key=lambda f: (abs(f - frame), f))]
                 return near.positions, near.theta
             return None, None

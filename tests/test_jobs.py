@@ -223,6 +223,9 @@ def test_frame_change_folds_keyframed_percent_and_bake_equals_cache(folded, exte
     assert heights[1] < heights[0] < heights[3] < heights[2]  # frames 2 < 5 < 7 < 9 fold further
     cache = timeline.cache_for(ob)
     assert sorted(cache.frames) == [2, 5, 7, 9]
+    # the first frame is folded along the natural path: the static fold (with the props' float32 settings), exactly
+    static = solver_mod.Solver(mesh, cache.solver(ob.curved_fold_mesh).settings).solve(timeline.percent_at(ob, 5))
+    assert np.array_equal(cache.frames[5].positions, static.positions)
     cached = {f: cache.frames[f].positions.copy() for f in cache.frames}
     # Bake: the cached frames are taken as they are, the others solved (and cached).
     assert bpy.ops.curved_fold.bake() == {"FINISHED"}

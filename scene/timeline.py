@@ -120,7 +120,7 @@ class FrameCache:
         then the nearest solved frame is the start, as before the natural path (a path step from the last grid point
         may need more than the cap — CircularPleat from the flat sheet to 10 % needs ~20 — and would show a frame
         short of its shape; a bake folds such frames along the path with the whole budget)."""
-        from ..core.solve.path import warm_startable
+        from ..core.solve.path import extrapolate, warm_startable
 
         solver = self.solver(props)
         step = solver.settings.continuation_step
@@ -142,12 +142,7 @@ class FrameCache:
             before = (other.percent, other.positions, other.theta)
         else:
             before = solver.path_state(percent)
-        if before is None or before[0] == q:
-            return near.positions, near.theta
-        s = (percent - q) / (q - before[0])
-        if not 0.0 < s <= 1.0:
-            return near.positions, near.theta
-        return near.positions + s * (near.positions - before[1]), near.theta + s * (near.theta - before[2])
+        return extrapolate(percent, (q, near.positions, near.theta), before)
 
     def solve_steps(
         self,

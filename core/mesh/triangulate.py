@@ -271,16 +271,14 @@ def _lawson(
         if t1 < 0 or t2 < 0:
             return False
         c, d = third(t1, a, b), third(t2, b, a)
-        pa, pb, pc, pd = xy[a], xy[b], xy[c], xy[d]
-        if exact:
-            pa, pb, pc, pd = fr[a], fr[b], fr[c], fr[d]
-            if _orient2(pc, pa, pd) <= 0 or _orient2(pd, pb, pc) <= 0:
-                return False
-            val = _incircle_exact(pa, pb, pc, pd)
-            return val > 0 or (val == 0 and min(c, d) < min(a, b))
+        pts = fr if exact else xy
+        pa, pb, pc, pd = pts[a], pts[b], pts[c], pts[d]
         # the quad a, d, b, c must be strictly convex: both new triangles (c, a, d), (d, b, c) counter-clockwise
         if _orient2(pc, pa, pd) <= 0 or _orient2(pd, pb, pc) <= 0:
             return False
+        if exact:  # a tie is an exact zero
+            val = _incircle_exact(pa, pb, pc, pd)
+            return val > 0 or (val == 0 and min(c, d) < min(a, b))
         val = _incircle_scalar(pa, pb, pc, pd)
         if val > _TIE_TOLERANCE:
             return True

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh
-from .path import warm_startable
+from .path import extrapolate, warm_startable
 from .solver import Solver, SolverSettings
 
 
@@ -61,17 +61,11 @@ class FoldAnimation:
         self.percent: float | None = None
 
     def _predict(self, percent: float) -> tuple[np.ndarray, np.ndarray]:
-        """Start of the next quasi-static solve: the last equilibrium, extrapolated linearly in the fold percent."""
-        if self._previous is None or self.percent is None:
+        """Start of the next quasi-static solve: the last equilibrium, extrapolated linearly in the fold percent
+        (:func:`.path.extrapolate`; none while reversing or jumping further than the last step)."""
+        if self.percent is None:
             return self.positions, self.theta
-        p0, x0, t0 = self._previous
-        step = self.percent - p0
-        if step == 0:
-            return self.positions, self.theta
-        s = (float(percent) - self.percent) / step
-        if not 0 < s <= 1.0:  # reversing or jumping further than the last step: no extrapolation
-            return self.positions, self.theta
-        return self.positions + s * (self.positions - x0), self.theta + s * (self.theta - t0)
+        return extrapolate(percent, (self.percent, self.positions, self.theta), self._previous)
 
     def frame(self, percent: float) -> FrameResult:
         """Advance to fold percent ``percent`` (1.0 = 100 %) and return the frame."""

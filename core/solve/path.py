@@ -56,6 +56,25 @@ def grid_below(percent: float, step: float) -> float:
     return grid_point(steps_to(percent, step) - 1, percent, step)
 
 
+def extrapolate(
+    percent: float,
+    last: tuple[float, np.ndarray, np.ndarray],
+    before: tuple[float, np.ndarray, np.ndarray] | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The predictor along the folding path: positions and θ of the equilibrium ``last`` = ``(percent, x, θ)``,
+    extrapolated linearly in the fold percent from ``before`` (the equilibrium before it on the path) to
+    ``percent``, when that step is no longer than theirs and goes the same way; else ``last``'s as they are (no
+    equilibrium before, a step back, or a jump further than the last step). Newton is the corrector. Used by the
+    path's stages, the quasi-static animation and the timeline's frames alike."""
+    q, x, theta = last
+    if before is None or before[0] == q:
+        return x, theta
+    s = (float(percent) - q) / (q - before[0])
+    if not 0.0 < s <= 1.0:
+        return x, theta
+    return x + s * (x - before[1]), theta + s * (theta - before[2])
+
+
 def warm_startable(previous: float | None, percent: float, step: float) -> bool:
     """Whether a frame at ``percent`` may warm-start from an equilibrium at ``previous`` (both fractions) instead of
     being solved from the natural path: ``previous`` lies after the last grid point before ``percent`` and before

@@ -167,6 +167,8 @@ class Solver:
         self._assembler: HessianAssembler | None = None
         self._dt: float | None = None
         self.lm_lambda = 1e-3
+        self._path_key: tuple[str, int] | None = None  # the settings and pins the kept path states belong to
+        self._path_states: dict[float, path.PathState] = {}
 
     @property
     def assembler(self) -> HessianAssembler:
@@ -334,12 +336,10 @@ class Solver:
 
         def predicted(p: float) -> tuple[np.ndarray, np.ndarray]:
             """The start of the solve at ``p``: the last state, extrapolated from the last two (a predictor)."""
-            last = states[-1]
-            if len(states) < 2:
-                return last.x, last.theta
-            before = states[-2]
-            frac = (p - last.percent) / (last.percent - before.percent)
-            return last.x + frac * (last.x - before.x), last.theta + frac * (last.theta - before.theta)
+            last, before = states[-1], (states[-2] if len(states) > 1 else None)
+            return path.extrapolate(
+                p, (last.percent, last.x, last.theta), before and (before.percent, before.x, before.theta)
+            )
 
         halved: list[float] = []
 
@@ -363,7 +363,7 @@ class Solver:
         for k in range(1, n + 1):
             p = percent if k == n else path.grid_point(k, percent, s.continuation_step)
             kept = self._path.get(p) if k < n else None
-            if kept is not None and kept.percent == p:
+            if kept is not None:
                 states.append(kept)
                 totals = dict(kept.totals)
                 reused = kept.totals["iterations"]
@@ -398,7 +398,7 @@ class Solver:
     def _path(self) -> dict[float, path.PathState]:
         """The natural path's states at grid points (see :meth:`fold_steps`), for the current settings and pins."""
         key = (repr(self.settings), id(self.constraints))
-        if getattr(self, "_path_key", None) != key:
+        if self._path_key != key:
             self._path_key, self._path_states = key, {}
         return self._path_states
 

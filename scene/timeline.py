@@ -5,8 +5,10 @@ to that frame's percent — the design's "solver stepped per frame".
   history). A new frame a small step after a solved one warm-starts from it (extrapolated in the fold percent), so
   playback costs a few Newton iterations per frame (at most :data:`FRAME_MAX_ITERATIONS`). In a bake any other
   frame is solved from the natural path (``core.solve.path``, whose grid states the frame cache's solver keeps) with
-  the whole iteration budget, and is then the static fold at its percent; playback warm-starts it from the nearest
-  solved frame instead (synchronous and capped, it cannot afford a path step), the first frame from the path.
+  the whole iteration budget, and is then the static fold at its percent; so is a warm frame that does not converge
+  in ``core.solve.path.WARM_MAX_ITERATIONS`` (as in ``core.solve.animation``). Playback warm-starts such frames
+  from the nearest solved frame instead (synchronous and capped, it cannot afford a path step), the first frame
+  from the path.
   The cache is dropped when the stored mesh changes (re-fold, live edit) and its entries are not reused when the
   solver settings differ. Bakes read it and fill it (``bake.bake_job``): a converged frame is solved once.
 * :func:`on_frame_change` (``frame_change_post``) folds each animated fold object that is not showing a current
@@ -27,13 +29,17 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from ..core import as_units
+from ..core.solve.path import WARM_MAX_ITERATIONS
 from . import app_handlers, bake, folding, jobs, mesh_object
 from .fold_settings import engine_id, settings_dict
 
 FRAME_MAX_ITERATIONS = 12
-"""Newton iterations per timeline or bake frame. Warm-started frames converge in 3-9 on the fixtures; where the
-fast solver stalls (CircularPleat-antiFacet past 90 %, residual ~1e-3), more iterations buy nothing and the frame
-is reported as not converged, the next one continuing from it."""
+"""Newton iterations per frame of playback, which is synchronous (Blender needs the frame's shape before it draws
+it). Most warm-started frames converge in 2–12; one that does not is shown as it is and reported not converged,
+the next one continuing from it. A bake gives warm frames ``core.solve.path.WARM_MAX_ITERATIONS`` instead and
+solves a frame that still has not converged from the natural path: with the cap of 12, a 101-frame bake of
+CircularPleat-antiFacet, Treble_Clef and Rotating_Star left 22, 16 and 13 frames unconverged (Gauss–Newton's
+linear tail, residuals 1e-6 to 5e-3)."""
 
 
 @dataclass
@@ -154,12 +160,13 @@ class FrameCache:
         n_frames: int = 0,
         path_budget: int | None = FRAME_MAX_ITERATIONS,
     ) -> Generator[jobs.Progress, None, CachedFrame]:
-        """Solve ``frame`` at ``percent`` warm from a solved frame (:meth:`start`) in at most
-        :data:`FRAME_MAX_ITERATIONS`, or from the natural path in at most ``path_budget`` (``None``: the solver's
-        whole budget, as a static fold — bakes; playback keeps the frame's cap, and a path state it cuts short is
-        not kept), one Newton iteration per unit; caches and returns the frame. A new solver's model and Hessian
-        structure are units of their own (~300 ms in one unit at 3,000 faces before: the longest slice of a
-        bake)."""
+        """Solve ``frame`` at ``percent`` warm from a solved frame (:meth:`start`), or from the natural path in at
+        most ``path_budget``, one Newton iteration per unit; caches and returns the frame. Playback (``path_budget``
+        an int) caps both at :data:`FRAME_MAX_ITERATIONS` (a path state it cuts short is not kept). A bake
+        (``path_budget`` ``None``) gives path frames the solver's whole budget, as a static fold, and warm frames
+        ``WARM_MAX_ITERATIONS``; a warm frame that does not converge in them is solved from the path. A new
+        solver's model and Hessian structure are units of their own (~300 ms in one unit at 3,000 faces before: the
+        longest slice of a bake)."""
         new_solver = settings_key(props) not in self._solvers
         solver = self.solver(props)
         if new_solver:
@@ -170,8 +177,29 @@ class FrameCache:
             if solver.method != "faithful":  # the ordering in units, the structure, then the scatter indices
                 yield from as_units(solver.prepare_steps(), built)
                 yield built
-        start, theta = self.start(frame, percent, props, fallback=path_budget is not None)
-        budget = path_budget if start is None else FRAME_MAX_ITERATIONS
+        playback = path_budget is not None
+        start, theta = self.start(frame, percent, props, fallback=playback)
+        warm_budget = FRAME_MAX_ITERATIONS if playback else WARM_MAX_ITERATIONS
+        budget = path_budget if start is None else warm_budget
+        r = yield from self._frame_solve(solver, frame, percent, start, theta, budget, frame_index, n_frames)
+        iterations = r.iterations - r.reused_iterations  # this frame's, not those of the kept path states
+        if start is not None and not r.converged and not playback:
+            # a bake's warm frame that did not converge in its cap lost its branch: solved from the natural path
+            # with the whole budget, it is the static fold at its percent (as in core.solve.animation)
+            r = yield from self._frame_solve(solver, frame, percent, None, None, None, frame_index, n_frames)
+            iterations += r.iterations - r.reused_iterations
+        entry = CachedFrame(
+            float(percent), settings_key(props), r.positions, r.theta, iterations, r.converged, r.residual
+        )
+        self.frames[int(frame)] = entry
+        return entry
+
+    @staticmethod
+    def _frame_solve(
+        solver, frame: int, percent: float, start, theta, budget: int | None, frame_index: int, n_frames: int
+    ) -> Generator[jobs.Progress, None, object]:
+        """One solve of a frame (warm from ``start``, or from the natural path when it is ``None``), one Newton
+        iteration per unit; returns the solver's result."""
         steps = solver.solve_steps(percent, start=start, theta_prev=theta, max_iterations=budget)
         while True:
             try:
@@ -186,12 +214,7 @@ class FrameCache:
                 yield jobs.Progress("solve", p.iteration, p.residual, positions=p.positions)
         if not np.all(np.isfinite(r.positions)):
             raise FloatingPointError(f"frame {frame}: the solver returned non-finite positions")
-        iterations = r.iterations - r.reused_iterations  # this frame's, not those of the kept path states
-        entry = CachedFrame(
-            float(percent), settings_key(props), r.positions, r.theta, iterations, r.converged, r.residual
-        )
-        self.frames[int(frame)] = entry
-        return entry
+        return r
 
 
 _caches: dict[str, FrameCache] = {}

@@ -102,3 +102,24 @@ def test_frames_that_jump_are_the_static_fold_at_their_percent():
         f = anim.frame(p)
         if p in (0.1, 0.3, 0.7, 0.4):
             assert np.array_equal(f.positions, Solver(mesh, SolverSettings()).solve(p).positions)
+
+
+def test_a_warm_frame_that_does_not_converge_in_its_cap_is_the_static_fold():
+    """simpleVertex over 100 frames: the warm step to 59 % slides for more than ``WARM_MAX_ITERATIONS`` (its branch
+    loses its stability there); the frame is then solved from the natural path, as the static fold at 59 % exactly,
+    and every frame converges."""
+    from curved_fold.core.solve.path import WARM_MAX_ITERATIONS, warm_startable
+    from curved_fold.core.solve.solver import Solver
+    from tests.test_solver_fixtures import fixture_mesh
+
+    mesh = fixture_mesh("simpleVertex.svg")
+    anim = FoldAnimation(mesh, SolverSettings())
+    fell_back, previous = [], None
+    for k in range(1, 101):
+        f = anim.frame(k / 100)
+        assert f.converged, k
+        if warm_startable(previous, k / 100, 0.25) and f.iterations > WARM_MAX_ITERATIONS:
+            assert np.array_equal(f.positions, Solver(mesh, SolverSettings()).solve(k / 100).positions), k
+            fell_back.append(k)
+        previous = k / 100
+    assert fell_back

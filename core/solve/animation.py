@@ -21,8 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import run_to_end
 from ..mesh.fold_mesh import FoldMesh
-from .path import extrapolate, warm_startable
+from .path import WARM_MAX_ITERATIONS, extrapolate, warm_startable
 from .solver import Solver, SolverSettings
 
 
@@ -71,12 +72,20 @@ class FoldAnimation:
         """Advance to fold percent ``percent`` (1.0 = 100 %) and return the frame."""
         t0 = time.perf_counter()
         if self.mode == "quasi_static":
+            warm = None
             if warm_startable(self.percent, percent, self.solver.settings.continuation_step):
                 start, theta = self._predict(percent)
-                r = self.solver.solve(percent, start=start, theta_prev=theta)
+                steps = self.solver.solve_steps(
+                    percent, start=start, theta_prev=theta, max_iterations=WARM_MAX_ITERATIONS
+                )
+                warm = run_to_end(steps)
+            if warm is not None and warm.converged:
+                r = warm
                 self._previous = (self.percent, self.positions, self.theta)
             else:  # from the natural path; its state at the grid point before is the predictor's next anchor
                 r = self.solver.solve(percent)
+                if warm is not None:  # a warm start that did not converge in its cap: the frame is the static fold
+                    r.iterations += warm.iterations
                 self._previous = self.solver.path_state(percent)
             self.percent = float(percent)
         else:

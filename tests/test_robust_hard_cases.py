@@ -315,3 +315,20 @@ def test_a_fold_at_the_round_off_floor_of_its_forces_converges(monkeypatch: pyte
     monkeypatch.setattr(newton, "ROUNDOFF_FACTOR", 0.0)
     crawled = fold_pattern(pattern, angle=90.0).report
     assert not crawled["converged"] and crawled["iterations"] == 500
+
+
+def test_a_stalled_path_stage_is_solved_again_with_exact_newton(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A pattern of a fuzz run (seed 42; 337 faces, mountains at −179° crossing a facet curve on a 20 mm sheet; its
+    arrays in tests/data/fuzz_exact_retry.json). Gauss–Newton's last path stage stalled at residual 24 ("no descent
+    step": a −179° crease folded the wrong way, its wing pressed into the fading's dead zone), and so did each of
+    three halvings. Solved once more with the exact Hessian from its first iteration (``path.EXACT_RETRY``), with
+    halvings, the fold converges to a stable minimum; without the retry it stalls as before."""
+    from curved_fold.core.solve import path
+
+    pattern = _stored_pattern("fuzz_exact_retry.json")
+    report = check_stable(fold_pattern(pattern, angle=90.0))
+    assert report["converged"] and report["negative_pivots"] == 0, report["message"]
+    assert "retried with exact Newton" in report["message"]
+    monkeypatch.setattr(path, "EXACT_RETRY", False)
+    stalled = fold_pattern(pattern, angle=90.0).report
+    assert not stalled["converged"] and stalled["message"].startswith("stalled")

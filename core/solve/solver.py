@@ -14,6 +14,7 @@ the iteration count. Positions come back in the mesh's millimetres.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Generator
 from dataclasses import dataclass, field, replace
@@ -311,12 +312,23 @@ class Solver:
         totals = dict(iterations=0, evaluations=0, assemblies=0, solves=0, exact=0, saddles=0)
         reused = 0
 
-        def stage(x0: np.ndarray, t_start: np.ndarray, p: float, tolerance: float, pinned: bool):
-            """One Newton solve of the path, its iterations numbered on from the last and its counts added up."""
+        def stage(
+            x0: np.ndarray, t_start: np.ndarray, p: float, tolerance: float, pinned: bool, tail: float | None = None
+        ):
+            """One Newton solve of the path, its iterations numbered on from the last and its counts added up
+            (``tail``: the residual below which it tries the exact Hessian, default :data:`.newton.TAIL_RESIDUAL`)."""
             cap = s.max_iterations if max_iterations is None else max_iterations
             budget = max(cap - totals["iterations"], 0)  # max_iterations caps the whole path
             steps = self._fast_steps(
-                x0, t_start, p, t0, tolerance=tolerance, max_iterations=budget, check_minimum=True, pinned=pinned
+                x0,
+                t_start,
+                p,
+                t0,
+                tolerance=tolerance,
+                max_iterations=budget,
+                check_minimum=True,
+                pinned=pinned,
+                tail_residual=tail,
             )
             while True:
                 try:
@@ -342,13 +354,19 @@ class Solver:
             )
 
         halved: list[float] = []
+        retried: list[float] = []
 
         def reach(p: float, tolerance: float, halvings: int = 0):
-            """Solve at ``p`` from the last state, appending it to ``states``; a stage that stalls ("no descent
-            step") is taken again in two halves, up to :data:`path.MAX_HALVINGS` times."""
+            """Solve at ``p`` from the last state, appending it to ``states``. A stage that stalls ("no descent
+            step") is solved again with the exact Hessian from its first iteration (:data:`path.EXACT_RETRY`) and, if
+            that stalls too, taken again in two halves, up to :data:`path.MAX_HALVINGS` times."""
             x0, t_start = predicted(p)
             self.lm_lambda = states[-1].lm_lambda
             r = yield from stage(x0, t_start, p, tolerance, pinned=not anchor)
+            if path.EXACT_RETRY and not r.converged and r.message.startswith("stalled"):
+                retried.append(p)  # the stage again, exact Newton from its first iteration
+                self.lm_lambda = states[-1].lm_lambda
+                r = yield from stage(x0, t_start, p, tolerance, pinned=not anchor, tail=math.inf)
             if not r.converged and r.message.startswith("stalled") and halvings < path.MAX_HALVINGS:
                 halved.append(p)
                 mid = states[-1].percent + 0.5 * (p - states[-1].percent)
@@ -390,7 +408,9 @@ class Solver:
         r.reused_iterations = reused
         r.negative_pivots = negative
         r.simulation_ms = (time.perf_counter() - t0) * 1000.0
-        halves = f", {len(halved)} halved after a stall" if halved else ""
+        halves = f", {len(retried)} retried with exact Newton" if retried else ""
+        halves += f", {len(halved)} halved" if halved else ""
+        halves += " after a stall" if retried or halved else ""
         r.message = f"{r.message} (continuation from the flat sheet in {n} fold-percent steps{halves})"
         return r
 
@@ -483,14 +503,17 @@ class Solver:
         max_iterations: int | None = None,
         check_minimum: bool = False,
         pinned: bool = True,
+        tail_residual: float | None = None,
     ) -> Generator[SolveProgress, None, FoldResult]:
         """One Newton solve. From the flat sheet (continuation stages, ``check_minimum``) the exact tail starts at
         residual ``TAIL_RESIDUAL`` and a converged state must be a minimum; a warm start from an earlier equilibrium
         (animation frames, live re-folds) is a small correction that one Gauss–Newton step usually makes, so there the
-        exact Hessian is used only when Gauss–Newton is slow. ``pinned`` false: without the pins' fixed degrees of
-        freedom (the free fold of pins that hold only the pose, :meth:`fold_steps`)."""
+        exact Hessian is used only when Gauss–Newton is slow. ``tail_residual`` overrides where the exact tail starts
+        (a stalled path stage is retried with ``math.inf``: exact from the first iteration). ``pinned`` false:
+        without the pins' fixed degrees of freedom (the free fold of pins that hold only the pose,
+        :meth:`fold_steps`)."""
         model = self.model
-        steps = self._newton(x0, theta_prev, percent, tolerance, max_iterations, check_minimum, pinned)
+        steps = self._newton(x0, theta_prev, percent, tolerance, max_iterations, check_minimum, pinned, tail_residual)
         while True:
             with single_threaded_blas():  # per step: never left on while the caller holds the generator
                 try:
@@ -531,6 +554,7 @@ class Solver:
         max_iterations: int | None = None,
         check_minimum: bool = False,
         pinned: bool = True,
+        tail_residual: float | None = None,
     ):
         s = self.settings
         model = self.model
@@ -548,7 +572,7 @@ class Solver:
             fixed=None if self.constraints is None or not pinned else self.constraints.fixed_mask(model.n_nodes),
             exact_tail=s.exact_tail,
             check_minimum=check_minimum,
-            tail_residual=TAIL_RESIDUAL if check_minimum else 0.0,
+            tail_residual=(TAIL_RESIDUAL if check_minimum else 0.0) if tail_residual is None else tail_residual,
         )
 
 

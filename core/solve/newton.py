@@ -96,6 +96,8 @@ quadratic model predicted (≥ 3/4), multiplied by 10 after a shortened or rejec
 stagnates (:data:`STAGNATION_WINDOW`)."""
 
 STAGNATION_WINDOW = 8
+"""The damping factor grows when the residual of the last this-many iterations is not below half the best before:
+in a nearly flat valley (a soft buckled state) small damping lets Newton steps slide along it without end."""
 
 ROUNDOFF_RESIDUAL = 1e-4
 """Below this residual a solve that stagnates (:data:`STAGNATION_WINDOW`) measures the round-off floor of its forces
@@ -105,9 +107,7 @@ ROUNDOFF_FACTOR = 10.0
 """A stagnating solve whose residual is within this factor of the round-off floor is converged: no representable
 position is measurably closer to equilibrium. A fuzzed 71-face sheet whose border four straight creases cross at
 grazing angles (corners of 0.09°) stagnated at residual 1.4e-6 for 300 iterations, where moving the positions by
-one unit in the last place changes the forces by up to 1.7e-7 (ordinary patterns: ~1e-10)."""
-"""The damping factor grows when the residual of the last this-many iterations is not below half the best before:
-in a nearly flat valley (a soft buckled state) small damping lets Newton steps slide along it without end."""
+one unit in the last place changes the forces by up to 7.6e-7 (ordinary patterns: ~1e-10)."""
 
 INDEFINITE_BACKOFF = 3
 """Iterations without an exact-Hessian attempt after one found the Hessian indefinite away from a saddle (unless

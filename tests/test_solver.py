@@ -220,3 +220,22 @@ def test_the_hessian_structure_is_prepared_in_units_and_gives_the_same_fold():
     assert prepared.matrix.storage_size == plain.matrix.storage_size
     np.testing.assert_array_equal(prepared.work["index"], plain.work["index"])
     np.testing.assert_array_equal(solver.solve(0.8).positions, Solver(mesh).solve(0.8).positions)
+
+
+def test_a_tolerance_below_the_round_off_floor_converges_to_round_off(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No representable position is closer to equilibrium than the change one unit in the last place of the
+    positions makes to the forces (``newton.roundoff_floor``). Asked for a tolerance below it (0, 1e-16), a fold
+    stagnates there; within ``ROUNDOFF_FACTOR`` of the floor it is converged and says so, instead of crawling to the
+    budget or stalling. A tolerance it can reach is unaffected."""
+    from curved_fold.core.solve import newton
+
+    mesh = grid_mesh(6, 6, 60.0, {(3 + 7 * j, 3 + 7 * (j + 1)): ("V", 150.0) for j in range(6)})
+    reachable = Solver(mesh, SolverSettings(tolerance=1e-12)).solve(0.8)
+    assert reachable.converged and reachable.message.startswith("converged: residual")
+    for tolerance in (1e-16, 0.0):
+        r = Solver(mesh, SolverSettings(tolerance=tolerance)).solve(0.8)
+        assert r.converged and r.message.startswith("converged to round-off"), r.message
+        assert r.residual < 1e-12 and r.negative_pivots == 0
+        assert rigid_rms(r.positions, reachable.positions) / mesh.diagonal < 1e-9
+    monkeypatch.setattr(newton, "ROUNDOFF_FACTOR", 0.0)
+    assert not Solver(mesh, SolverSettings(tolerance=0.0)).solve(0.8).converged

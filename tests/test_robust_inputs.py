@@ -119,6 +119,34 @@ def test_crease_crossing_the_border_is_trimmed_with_a_warning() -> None:
     assert report["fold_angle_error_mean_deg"] < 1.0
 
 
+def test_a_crease_drawn_just_past_the_border_does_not_move_it() -> None:
+    """A slanted crease drawn 0.1 mm past the border crosses it next to its own end point, outside the sheet (within
+    the crossing snap, 4 merge tolerances): the crossing is not snapped there, so the outline stays where it was
+    drawn, and the piece outside is removed with the usual warning (it used to bend the border through that point)."""
+    p = pattern_of(BORDER + '\n<path id="over" d="M30 0 L35.05 100.1" stroke="#f00"/>')
+    border = p.vertices[np.unique(p.edges[p.assignments == "B"])]
+    on_rectangle = np.isclose(border, 0.0, atol=1e-9) | np.isclose(np.abs(border), 100.0, atol=1e-9)
+    assert on_rectangle.any(axis=1).all(), border[~on_rectangle.any(axis=1)]
+    assert any("removed 1 crease segment(s) outside the border, from SVG <path id='over'>" in w for w in p.warnings)
+    assert_folds_finite(p, angle=90)
+
+
+def test_a_crease_that_stops_just_short_of_the_border_is_reported() -> None:
+    """A crease drawn "to the edge" by eye that stops 0.3 mm short (beyond the merge tolerance) is named with the
+    gap: its last piece cannot fold fully. One that reaches the border, or ends far inside the sheet, is not."""
+    p = pattern_of(BORDER + '\n<path id="short" d="M40 0 L40 99.7" stroke="#f00"/>')
+    assert any(
+        "1 crease end(s) stop short of the border (0.3 mm at (40.000, -99.700)), from SVG <path id='short'>" in w
+        for w in p.warnings
+    ), p.warnings
+    for body in (
+        '<path id="full" d="M40 0 L40 100" stroke="#f00"/>',
+        '<path id="mid" d="M40 0 L40 60" stroke="#f00"/>',
+    ):
+        assert not any("short of the border" in w for w in pattern_of(BORDER + "\n" + body).warnings)
+    assert_folds_finite(p, angle=90)
+
+
 # ----------------------------------------------------------------------------------------------- curves
 
 

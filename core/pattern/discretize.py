@@ -16,7 +16,9 @@ Steps, in order:
    removed. Candidate pairs come from a uniform grid over the segments' bounding boxes, so the work grows with the
    number of nearby pairs, not with E².
 4. **Outside pieces.** If the border is closed, crease pieces lying outside it (creases drawn slightly past the
-   edge of the sheet) are removed, with a warning.
+   edge of the sheet) are removed, with a warning; a crossing on the border never snaps to a vertex off it, so the
+   outline stays where it was drawn. Free ends of creases and cuts that stop just short of the border
+   (:data:`SHORT_OF_BORDER_FRACTION`) are reported.
 5. **Samples beside junctions.** A curve sample point left a small fraction of a chord from a crossing or T-junction
    on its curve is removed where the curve stays within ``tolerance`` of the new chord (the short piece would force
    sliver triangles; :func:`_drop_samples_beside_junctions`).
@@ -88,6 +90,12 @@ such values come from a wrong unit or viewBox, never from a real sheet."""
 JUNCTION_SLIVER_FRACTION = 0.25
 """A curve sample vertex closer than this many ``interval`` to a junction on its curve is removed when the curve
 allows (see :func:`_drop_samples_beside_junctions`)."""
+
+SHORT_OF_BORDER_FRACTION = 0.01
+"""A crease or cut whose free end lies within this fraction of the sheet size of the border (but beyond the merge
+tolerance) is reported: drawn by hand or eye, "to the edge" often stops a few tenths of a millimetre short, and a
+crease that does not reach the border cannot fold its last piece fully (a hand-drawn 160 mm sheet: ends 0.2 and
+0.3 mm short folded 9° and 13° of 110° there, silently)."""
 
 PRIORITY = {"B": 0, "C": 1, "M": 2, "V": 2, "U": 3, "F": 4}
 """Which assignment wins when two drawn segments coincide: the sheet outline first (a crease on the border cannot
@@ -325,12 +333,13 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def _split_records(
-    verts: np.ndarray, edges: np.ndarray, tol: float
+    verts: np.ndarray, edges: np.ndarray, tol: float, fixed: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Where segments must be split: ``(edge, distance along it, vertex id or -1-k for new point k, new points)``.
 
     X crossings get one new point shared by both segments; T-junctions (an endpoint within ``tol`` of another
-    segment's interior) and collinear overlaps split at the existing endpoint.
+    segment's interior) and collinear overlaps split at the existing endpoint. ``fixed`` (bool per edge): segments
+    that must not move (the border): a crossing on one snaps only to a vertex within ``tol`` of its line.
     """
     a, b = verts[edges[:, 0]], verts[edges[:, 1]]
     i, j = _candidate_pairs(a, b, tol)
@@ -367,6 +376,14 @@ def _split_records(
         # hair) snaps to that vertex instead of making a cluster of new ones: within SNAP_FACTOR × tol.
         xb = x[both]
         snap = _nearest_within(verts, xb, SNAP_FACTOR * tol)
+        if fixed is not None:
+            # the outline never moves: a crease drawn a little past the border crosses it next to its own end
+            # point, outside the sheet; snapping the crossing there bent the border through that point
+            for e in (i[both], j[both]):
+                check = np.flatnonzero(fixed[e] & (snap >= 0))
+                ea, eb = verts[edges[e[check], 0]], verts[edges[e[check], 1]]
+                off = np.abs(_cross(eb - ea, verts[snap[check]] - ea)) / np.maximum(np.hypot(*(eb - ea).T), 1e-300)
+                snap[check[off > tol]] = -1
         fresh = snap < 0
         ids = snap.copy()
         ids[fresh] = -1 - (n_new + np.arange(int(fresh.sum())))
@@ -775,7 +792,7 @@ def _planar_arrangement(
     for _ in range(4):
         keep = edges[:, 0] != edges[:, 1]
         edges, attrs = edges[keep], attrs[keep]
-        rec = _split_records(verts, edges, merge_tolerance)
+        rec = _split_records(verts, edges, merge_tolerance, pieces.assignment[attrs] == "B")
         if len(rec[0]) == 0:
             break
         verts, edges, parent = _apply_splits(verts, edges, rec, merge_tolerance)
@@ -877,6 +894,40 @@ def _clip_to_border(
     return edges, attrs
 
 
+def _warn_short_of_border(
+    verts: np.ndarray,
+    edges: np.ndarray,
+    attrs: np.ndarray,
+    pieces: _Pieces,
+    sources: list[str],
+    size: float,
+    warnings: list[str],
+) -> None:
+    """Step 4 (end): warn about free ends of creases and cuts that stop just short of a closed border."""
+    assign = pieces.assignment[attrs]
+    is_b = assign == "B"
+    if not is_b.any() or np.any(np.bincount(edges[is_b].ravel(), minlength=len(verts)) % 2 == 1):
+        return  # no border, or an open one (already reported)
+    degree = np.bincount(edges.ravel(), minlength=len(verts))
+    ends = np.flatnonzero(degree == 1)
+    loose = np.isin(edges, ends) & np.isin(assign, ["M", "V", "U", "C"])[:, None]
+    if not loose.any():
+        return
+    which, side = np.nonzero(loose)
+    points = verts[edges[which, side]]
+    ba, bb = verts[edges[is_b, 0]], verts[edges[is_b, 1]]
+    gap = np.array([_point_segment_distance(np.broadcast_to(q, ba.shape), ba, bb).min() for q in points])
+    short = gap <= SHORT_OF_BORDER_FRACTION * size
+    if not short.any():
+        return
+    where = ", ".join(f"{gap[k]:.2g} mm at ({points[k, 0]:.3f}, {points[k, 1]:.3f})" for k in np.flatnonzero(short)[:4])
+    warnings.append(
+        f"{int(short.sum())} crease end(s) stop short of the border ({where}), from "
+        f"{_describe_sources(sources, pieces.polyline[attrs[which[short]]])}: a crease that does not reach the "
+        "border cannot fold its last piece fully; draw it to the border"
+    )
+
+
 def discretize(
     curves: list[CreaseCurve],
     *,
@@ -918,6 +969,7 @@ def discretize_steps(
     yield "planar arrangement"
     edges, attrs = _remove_duplicates(edges, attrs, pieces, sources, warnings)
     edges, attrs = _clip_to_border(verts, edges, attrs, pieces, sources, warnings)
+    _warn_short_of_border(verts, edges, attrs, pieces, sources, sheet_size(curves), warnings)
     yield "clipped to the border"
     edges, attrs, _ = _drop_samples_beside_junctions(verts, edges, attrs, pieces, interval, tolerance)  # step 5
     # step 6: straight border pieces between junctions, split evenly

@@ -85,8 +85,19 @@ def _exporter_output(tmp: Path, out: Path, quiet: bool) -> Iterator[_Captured]:
                 os.close(fd)
             if not log.failed and not quiet:
                 sink.seek(0)
-                text = sink.read().decode("utf-8", "replace").replace(str(tmp), str(out)).replace(tmp.name, out.name)
-                sys.stdout.write(text)
+                sys.stdout.write(_user_paths(sink.read().decode("utf-8", "replace"), tmp, out))
+
+
+def _user_paths(text: str, tmp: Path, out: Path) -> str:
+    """``text`` with the temporary files of a write named as the user's ``out``: ``tmp`` itself and the exporter's
+    own temporary file beside it (``scene.export`` writes atomically too, to ``.<tmp stem>.<random>.tmp<suffix>``,
+    which Blender's OBJ writer prints as "Writing to …")."""
+    import re
+
+    inner = re.escape("." + tmp.stem + ".") + r"[\w-]+" + re.escape(".tmp" + tmp.suffix)
+    text = re.sub(re.escape(str(tmp.parent) + os.sep) + inner, lambda _m: str(out), text)
+    text = re.sub(inner, lambda _m: out.name, text)
+    return text.replace(str(tmp), str(out)).replace(tmp.name, out.name)
 
 
 def _write_mesh(tmp: Path, out: Path, fold, quiet: bool = False) -> None:

@@ -74,6 +74,18 @@ def test_cli_fold_writes_obj_through_blender(tmp_path):
     assert extent.min() > 0.05 * extent.max()  # folded: no axis is flat any more (units are the exporter's)
 
 
+def test_cli_names_the_users_file_not_the_temporary_ones(tmp_path, capfd):
+    """Blender's OBJ writer prints the file it writes ("Writing to …"); the command line writes through two
+    temporary files (its own and the exporter's atomic one) and passes that output on naming the user's file."""
+    from curved_fold.cli import main
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    out = tmp_path / "named.obj"
+    assert main(["fold", str(examples / "single_curve.svg"), "--out", str(out)]) == 0
+    printed = capfd.readouterr().out
+    assert ".tmp" not in printed and str(out) in printed, printed
+
+
 def test_cli_rejects_unknown_output_suffix(tmp_path, capsys):
     from curved_fold.cli import main
 

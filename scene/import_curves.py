@@ -34,12 +34,12 @@ def import_crease_pattern(
     scene = scene or bpy.context.scene
     pattern = None
     if Path(path).suffix.lower() == ".fold":  # keep the file's pattern: the command line folds it as it is
-        from ..core.io.fold import fold_to_pattern, read_fold
+        from ..core.io.fold import read_fold_pattern
         from ..core.pattern.polylines import curves_from_pattern
 
         if not Path(path).is_file():
             raise PatternError(f"{path}: no such file")
-        pattern = fold_to_pattern(read_fold(path))
+        pattern = read_fold_pattern(path)
         curves, warnings = curves_from_pattern(pattern), list(pattern.warnings)
     else:
         curves, warnings = read_curves(path)

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh
+from ..pattern.discretize import subdivide_straight_border
 from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
 from .atomic import atomic_write_text
 from .fold_validate import load_fold_json
@@ -429,6 +430,19 @@ def fold_to_pattern(doc: FoldDocument, source: str | None = None) -> CreasePatte
         **columns,
     )
     pattern.validate()
+    return pattern
+
+
+def read_fold_pattern(path: str | os.PathLike[str]) -> CreasePattern:
+    """The crease pattern a fold of the FOLD file ``path`` starts from, the same through every door (command line,
+    Blender import): :func:`fold_to_pattern` and, for another tool's file (no ``curved_fold:`` fields; ours keep the
+    pieces they were discretised with), its straight border split into pieces as a drawing's is
+    (:func:`..pattern.discretize.subdivide_straight_border`)."""
+    doc = read_fold(path)
+    pattern = fold_to_pattern(doc)
+    if PREFIX + "edge_polyline" not in doc.data:
+        pattern = subdivide_straight_border(pattern)
+        pattern.validate()
     return pattern
 
 

@@ -110,9 +110,9 @@ def read_curves(path: str | os.PathLike[str]) -> tuple[list[CreaseCurve], list[s
     if suffix == ".blend":
         return _blend_curves(p), []
     from ..pattern.polylines import curves_from_pattern
-    from .fold import fold_to_pattern, read_fold
+    from .fold import read_fold_pattern
 
-    pattern = fold_to_pattern(read_fold(p))
+    pattern = read_fold_pattern(p)
     return curves_from_pattern(pattern), list(pattern.warnings)
 
 
@@ -132,9 +132,9 @@ def read_pattern(
     p = Path(path)
     suffix = _suffix(p)
     if suffix == ".fold":
-        from .fold import fold_to_pattern, read_fold
+        from .fold import read_fold_pattern
 
-        return fold_to_pattern(read_fold(p))
+        return read_fold_pattern(p)
     curves, warnings = read_curves(p)
     pattern = discretize(curves, interval=interval, tolerance=tolerance, merge_tolerance=merge_tolerance)
     pattern.warnings = warnings + pattern.warnings

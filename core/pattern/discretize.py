@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Generator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -496,6 +496,38 @@ def _subdivide_border(
     same = owner[1:] == owner[:-1]
     new_edges = np.column_stack([chain[:-1][same], chain[1:][same]])
     return np.concatenate([verts, new_pts]), new_edges, attrs[owner[:-1][same]]
+
+
+def subdivide_straight_border(pattern: CreasePattern, interval: float | None = None) -> CreasePattern:
+    """``pattern`` with its straight border edges split into ⌈length / interval⌉ equal pieces (paper §3.1, the step
+    a drawn pattern gets in :func:`discretize`), for crease patterns read as straight segments: a FOLD file from
+    another tool usually draws a rectangular sheet as four long edges, and without border vertices to attach
+    rulings to, the triangulation fans slivers into the corners (a sine-pleat strip: smallest corner 0.06° instead
+    of 8.2°, mean fold-angle error 14.9° instead of 2.2°). ``interval`` defaults to the paper's, scaled to the
+    sheet (:func:`default_parameters` of the border's largest extent). Edges already short enough are unchanged."""
+    straight = (pattern.assignments == "B") & ~pattern.edge_from_curve
+    if not straight.any():
+        return pattern
+    if interval is None:
+        border = pattern.vertices[np.unique(pattern.edges[straight | (pattern.assignments == "B")])]
+        interval = default_parameters(float(np.max(np.ptp(border, axis=0))))[0]
+    m = len(pattern.edges)
+    verts, edges, attrs = _subdivide_border(pattern.vertices, pattern.edges, np.arange(m), straight, interval)
+    if len(edges) == m:
+        return pattern
+    # edge k's first piece stays edge k (messages name a file's edges by index), the other pieces come after
+    first = np.r_[True, attrs[1:] != attrs[:-1]]
+    order = np.r_[np.flatnonzero(first), np.flatnonzero(~first)]
+    edges, attrs = edges[order], attrs[order]
+    return replace(
+        pattern,
+        vertices=verts,
+        edges=edges,
+        assignments=pattern.assignments[attrs],
+        fold_angles=pattern.fold_angles[attrs],
+        edge_polyline=pattern.edge_polyline[attrs],
+        edge_from_curve=pattern.edge_from_curve[attrs],
+    )
 
 
 def _drop_samples_beside_junctions(

@@ -47,7 +47,7 @@ CATALOGUE: dict[str, str] = {
     "edge not in triangulation": r"triangulation: pattern edge \d+ \(.*\) is not an edge of the triangulation",
     "vertex not in triangulation": r"triangulation: pattern vertex \d+ at \[.*\] mm is not in the triangulation",
     "degenerate triangle": r"(triangle \d+ .* is degenerate|has zero length)",
-    "absurd coordinates": r"coordinate .* mm in a \w+ segment is beyond",
+    "absurd coordinates": r"coordinate .* mm in a \w+ segment is beyond|an arc with centre or radius .* mm is beyond",
     "microscopic sheet": r"the sheet is only .* mm across \(minimum",
 }
 """Catalogued rejections (docs/errors.md): a short name → the regular expression its message must match."""
@@ -230,7 +230,7 @@ def test_classify_error_knows_the_catalogue() -> None:
 # Property-based fuzz of the two text readers (issue 16): any FOLD JSON and any SVG text, however wrong its types,
 # nesting or sizes, must either be read or be refused with one PatternError, never another exception.
 
-from curved_fold.core.io.fold import fold_to_pattern, parse_fold  # noqa: E402
+from curved_fold.core.io.fold import parse_fold, pattern_for_folding  # noqa: E402
 from curved_fold.core.io.svg import parse_svg_text  # noqa: E402
 
 FOLD_KEYS = [
@@ -302,7 +302,7 @@ def read_fold_text(text: str) -> str:
     try:
         doc = parse_fold(text, "fuzz.fold")
         if doc.vertices is not None:
-            fold_to_pattern(doc)
+            pattern_for_folding(doc)
     except PatternError:
         return "refused"
     return "read"

@@ -220,6 +220,17 @@ def test_absurd_coordinates_are_rejected_not_overflowed() -> None:
         pattern_of('<path id="border" d="M0 0 L1e300 0 L1e300 1e300 L0 1e300 Z" stroke="#000"/>')
 
 
+def test_a_circle_skewed_into_an_endless_ellipse_is_refused_at_once() -> None:
+    """``skewX(90)`` squashes a circle into an ellipse 1e16–1e17 mm long between ordinary end points (found by the
+    reader fuzz): its arc's radius is caught with the coordinates, in a millisecond (sampling it took 11 s)."""
+    t0 = time.perf_counter()
+    with pytest.raises(
+        PatternError, match=r"SVG <circle id='c'> \(line 4\): an arc with centre or radius [\d.]+e\+1\d mm"
+    ):
+        pattern_of(BORDER + '\n<circle id="c" r="5" transform="skewX(90)" stroke="#f00"/>')
+    assert time.perf_counter() - t0 < 1.0
+
+
 def test_absurd_scale_from_width_and_viewbox() -> None:
     """A wrong unit (a 1-unit viewBox stretched to 1e9 mm) is caught at the coordinates, with a hint at units."""
     text = svg(

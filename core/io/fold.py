@@ -434,11 +434,15 @@ def fold_to_pattern(doc: FoldDocument, source: str | None = None) -> CreasePatte
 
 
 def read_fold_pattern(path: str | os.PathLike[str]) -> CreasePattern:
-    """The crease pattern a fold of the FOLD file ``path`` starts from, the same through every door (command line,
-    Blender import): :func:`fold_to_pattern` and, for another tool's file (no ``curved_fold:`` fields; ours keep the
+    """The crease pattern a fold of the FOLD file ``path`` starts from (:func:`pattern_for_folding`)."""
+    return pattern_for_folding(read_fold(path))
+
+
+def pattern_for_folding(doc: FoldDocument) -> CreasePattern:
+    """The crease pattern a fold of ``doc`` starts from, the same through every door (command line, Blender
+    import): :func:`fold_to_pattern` and, for another tool's file (no ``curved_fold:`` fields; ours keep the
     pieces they were discretised with), its straight border split into pieces as a drawing's is
     (:func:`..pattern.discretize.subdivide_straight_border`)."""
-    doc = read_fold(path)
     pattern = fold_to_pattern(doc)
     if PREFIX + "edge_polyline" not in doc.data:
         pattern = subdivide_straight_border(pattern)

@@ -511,6 +511,8 @@ def subdivide_straight_border(pattern: CreasePattern, interval: float | None = N
     if interval is None:
         border = pattern.vertices[np.unique(pattern.edges[straight | (pattern.assignments == "B")])]
         interval = default_parameters(float(np.max(np.ptp(border, axis=0))))[0]
+    if not (interval > 0 and math.isfinite(interval)):  # a border of one point: nothing to split
+        return pattern
     m = len(pattern.edges)
     verts, edges, attrs = _subdivide_border(pattern.vertices, pattern.edges, np.arange(m), straight, interval)
     if len(edges) == m:
@@ -650,6 +652,9 @@ def _check_coordinates(curves: list[CreaseCurve]) -> None:
     points = [seg.points for c in curves for seg in c.segments]
     if not points:
         return
+    # an arc's centre and radii too: a transform can squash a circle into an ellipse 1e16 mm long between two
+    # ordinary end points (a fuzzed skewX(90)), and sampling it took the planar arrangement 11 s
+    points += [np.asarray(seg.arc[:4], dtype=float) for c in curves for seg in c.segments if seg.arc is not None]
     every = np.abs(np.concatenate([np.asarray(p, dtype=float).reshape(-1) for p in points]))
     finite = bool(np.all(np.isfinite(every)))
     if finite and float(every.max()) <= MAX_COORDINATE_MM:
@@ -665,6 +670,13 @@ def _check_coordinates(curves: list[CreaseCurve]) -> None:
                 raise PatternError(
                     f"{c.source or 'curve'}: coordinate {big:.3g} mm in a {seg.kind} segment is beyond "
                     f"±{MAX_COORDINATE_MM:g} mm (100 km); check the file's units, width/height and viewBox"
+                )
+            arc = np.abs(np.asarray(seg.arc[:4], dtype=float)) if seg.arc is not None else np.zeros(0)
+            if len(arc) and not (np.all(np.isfinite(arc)) and float(arc.max()) <= MAX_COORDINATE_MM):
+                raise PatternError(
+                    f"{c.source or 'curve'}: an arc with centre or radius {float(np.max(arc)):.3g} mm is beyond "
+                    f"±{MAX_COORDINATE_MM:g} mm (100 km); check the file's transforms (a skew of 90° squashes a "
+                    "circle into an endless ellipse)"
                 )
 
 

@@ -6,10 +6,12 @@ Two modes:
   the same two grid points of the natural path, :func:`.path.warm_startable`) is warm-started from the last
   positions and fold angles (θ history, so hinges keep unwrapping past ±180°), extrapolated linearly in the fold
   percent from the last two equilibria (a predictor along the folding path; the Newton solve is the corrector),
-  limited to steps no larger than the last one. Any other frame (the first, a jump, a grid point crossed, a step
-  back) is solved from the natural path like a static fold (:meth:`.Solver.fold_steps`, whose grid states the
-  solver keeps): it *is* the static fold at its percent, so the last frame of an animation equals the static fold
-  where a pattern has several equilibria.
+  limited to steps no larger than the last one, in at most :data:`.path.WARM_MAX_ITERATIONS`. Any other frame (the
+  first, a jump, a grid point crossed, a step back, a warm frame that did not converge in its cap) is solved from
+  the natural path like a static fold (:meth:`.Solver.fold_steps`, whose grid states the solver keeps): it *is*
+  the static fold at its percent, also where a pattern has several equilibria. Warm frames follow the fold more
+  finely than the static fold's one step from the last grid point; where a pattern branches inside that step
+  (concentric circles folded to 150°, docs/solver.md) the last frame can settle in a neighbouring stable state.
 * ``"dynamic"`` — Origami Simulator's behaviour: ``steps_per_frame`` explicit steps per frame with velocities carried
   over (no convergence test), like the app's 100 steps per rendered frame.
 """

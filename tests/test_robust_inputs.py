@@ -131,6 +131,19 @@ def test_a_crease_drawn_just_past_the_border_does_not_move_it() -> None:
     assert_folds_finite(p, angle=90)
 
 
+def test_a_hole_drawn_as_a_closed_cut_is_reported_as_a_loose_piece() -> None:
+    """A hole drawn as a closed cut loop (green) cuts a disc out of the sheet; the disc stays in the mesh as a loose
+    flat piece that the folded sheet passes through. The fold says so, with where the piece is; drawn as a second
+    border (black) the hole has no disc, and a sheet in one piece gets no such warning."""
+    crease = '\n<path id="v" d="M10 0 L10 100" stroke="#00f"/>'
+    hole = '<circle id="hole" cx="60" cy="50" r="15" stroke="{}"/>'
+    cut = fold_pattern(pattern_of(BORDER + crease + "\n" + hole.format("#0f0")), angle=90).report
+    [warning] = [w for w in cut["warnings"] if "separate pieces" in w]
+    assert warning.startswith("the sheet is in 2 separate pieces") and "around (60.000, -50.000) mm" in warning
+    for body in (BORDER + crease + "\n" + hole.format("#000"), BORDER + crease):
+        assert not any("separate pieces" in w for w in fold_pattern(pattern_of(body), angle=90).report["warnings"])
+
+
 def test_a_crease_that_stops_just_short_of_the_border_is_reported() -> None:
     """A crease drawn "to the edge" by eye that stops 0.3 mm short (beyond the merge tolerance) is named with the
     gap: its last piece cannot fold fully. One that reaches the border, or ends far inside the sheet, is not."""

@@ -80,6 +80,39 @@ def _load_blender_modules(mesh_type: str, backend: str) -> None:
         import bpy  # noqa: F401  (bmesh and mathutils need bpy imported first in the bpy module)
 
 
+def _warn_separate_pieces(verts: np.ndarray, tris: np.ndarray, warnings: list[str]) -> None:
+    """Warn when the sheet is in several pieces: a closed cut loop drawn for a hole leaves the cut-out disc in the
+    mesh as a loose piece (the folded sheet passes through it and the self-intersection count grows), and two
+    borders drawn side by side are two sheets. Each piece folds on its own; none is dropped."""
+    label = np.arange(len(verts))
+    sides = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
+    while True:  # label propagation along triangle sides: each vertex ends with the smallest index of its piece
+        low = np.minimum(label[sides[:, 0]], label[sides[:, 1]])
+        new = label.copy()
+        np.minimum.at(new, sides[:, 0], low)
+        np.minimum.at(new, sides[:, 1], low)
+        new = new[new]
+        if np.array_equal(new, label):
+            break
+        label = new
+    used = np.unique(tris)
+    pieces, count = np.unique(label[used], return_counts=True)
+    if len(pieces) < 2:
+        return
+    order = np.argsort(-count, kind="stable")
+    smaller = [
+        f"{count[k]} vertices around ({c[0]:.3f}, {c[1]:.3f}) mm"
+        for k in order[1:4]
+        for c in [verts[used[label[used] == pieces[k]]].mean(axis=0)]
+    ]
+    more = f" and {len(pieces) - 4} more" if len(pieces) > 4 else ""
+    warnings.append(
+        f"the sheet is in {len(pieces)} separate pieces (the largest has {count[order[0]]} vertices; the others: "
+        f"{'; '.join(smaller)}{more}): each folds on its own — a hole drawn as a closed cut leaves its disc as a loose "
+        "piece; draw a hole's outline as a border (black) instead"
+    )
+
+
 def _build_mesh(pattern: CreasePattern, mesh_type: str, backend: str) -> FoldMesh:
     _load_blender_modules(mesh_type, backend)
     t0 = time.perf_counter()
@@ -118,6 +151,7 @@ def _build_mesh(pattern: CreasePattern, mesh_type: str, backend: str) -> FoldMes
     }
     verts, tris, origin = split_cuts(pts, tris, cut_pairs)
     generation_ms = (time.perf_counter() - t0) * 1000.0
+    _warn_separate_pieces(verts, tris, warnings)
 
     # edges: every triangle side once, i < j
     sides = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])

@@ -24,7 +24,15 @@ from ..pattern.model import CreasePattern
 from .earcut import ear_clip
 from .fold_mesh import FoldMesh
 from .ruling import ruling_swaps
-from .triangulate import _outer_first, constrained_triangulation, face_loops, orient, resolve_backend, split_cuts
+from .triangulate import (
+    _outer_first,
+    connected_components,
+    constrained_triangulation,
+    face_loops,
+    orient,
+    resolve_backend,
+    split_cuts,
+)
 
 MESH_TYPES = ("ruling", "cdt", "earcut")
 
@@ -84,17 +92,7 @@ def _warn_separate_pieces(verts: np.ndarray, tris: np.ndarray, warnings: list[st
     """Warn when the sheet is in several pieces: a closed cut loop drawn for a hole leaves the cut-out disc in the
     mesh as a loose piece (the folded sheet passes through it and the self-intersection count grows), and two
     borders drawn side by side are two sheets. Each piece folds on its own; none is dropped."""
-    label = np.arange(len(verts))
-    sides = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
-    while True:  # label propagation along triangle sides: each vertex ends with the smallest index of its piece
-        low = np.minimum(label[sides[:, 0]], label[sides[:, 1]])
-        new = label.copy()
-        np.minimum.at(new, sides[:, 0], low)
-        np.minimum.at(new, sides[:, 1], low)
-        new = new[new]
-        if np.array_equal(new, label):
-            break
-        label = new
+    label = connected_components(len(verts), tris[:, [0, 1, 2]].ravel(), tris[:, [1, 2, 0]].ravel())
     used = np.unique(tris)
     pieces, count = np.unique(label[used], return_counts=True)
     if len(pieces) < 2:

@@ -24,9 +24,9 @@ Cuts are split afterwards (:func:`split_cuts`, Origami Simulator's ``splitCuts``
 and each vertex is duplicated once per extra fan of triangles separated by cuts.
 
 Speed: everything after the backend works on half-edge arrays (:func:`half_edges`, h = 3·triangle + k, twins found
-by sorting): the Delaunay screening, the constraint check, region labelling (:func:`_components`), the toggles and
-the face loops (:func:`face_loops`) are vectorised; Python loops remain only for the (few) Lawson flips, the
-region breadth-first search and the chaining of boundary half-edges into loops.
+by sorting): the Delaunay screening, the constraint check, region labelling (:func:`connected_components`), the
+toggles and the face loops (:func:`face_loops`) are vectorised; Python loops remain only for the (few) Lawson flips,
+the region breadth-first search and the chaining of boundary half-edges into loops.
 """
 
 from __future__ import annotations
@@ -417,7 +417,7 @@ def _outer_first(points: np.ndarray, loops: list[list[int]]) -> list[list[int]]:
     return [loops[outer]] + [lp for k, lp in enumerate(loops) if k != outer]
 
 
-def _components(n: int, t1: np.ndarray, t2: np.ndarray) -> np.ndarray:
+def connected_components(n: int, t1: np.ndarray, t2: np.ndarray) -> np.ndarray:
     """Connected components of n nodes joined by the pairs (t1, t2): each node's label is the smallest node index of
     its component (vectorised hooking of roots onto smaller labels with pointer jumping)."""
     lab = np.arange(n)
@@ -529,7 +529,7 @@ def _region_labels(he: tuple[np.ndarray, ...], n_tris: int) -> np.ndarray:
     org, dst, twin, is_seg = he
     tri_of = np.arange(3 * n_tris) // 3
     inner = (twin >= 0) & ~is_seg & (org < dst)
-    roots = _components(n_tris, tri_of[inner], tri_of[twin[inner]])
+    roots = connected_components(n_tris, tri_of[inner], tri_of[twin[inner]])
     return np.unique(roots, return_inverse=True)[1].reshape(-1)
 
 

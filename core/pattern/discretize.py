@@ -509,7 +509,7 @@ def subdivide_straight_border(pattern: CreasePattern, interval: float | None = N
     if not straight.any():
         return pattern
     if interval is None:
-        border = pattern.vertices[np.unique(pattern.edges[straight | (pattern.assignments == "B")])]
+        border = pattern.vertices[np.unique(pattern.edges[pattern.assignments == "B"])]
         interval = default_parameters(float(np.max(np.ptp(border, axis=0))))[0]
     if not (interval > 0 and math.isfinite(interval)):  # a border of one point: nothing to split
         return pattern
@@ -899,9 +899,11 @@ def _clip_to_border(
     attrs: np.ndarray,
     pieces: _Pieces,
     sources: list[str],
+    size: float,
     warnings: list[str],
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Step 4: refuse a self-crossing border, warn about an open one, remove crease pieces outside a closed one."""
+    """Step 4: refuse a self-crossing border, warn about an open one, remove crease pieces outside a closed one and
+    report crease ends just short of it (:func:`_warn_short_of_border`; ``size``: the sheet's)."""
     assign, edge_poly = pieces.assignment, pieces.polyline
     is_b = assign[attrs] == "B"
     if not is_b.any():
@@ -935,6 +937,7 @@ def _clip_to_border(
         keep = np.ones(len(edges), bool)
         keep[outside] = False
         edges, attrs = edges[keep], attrs[keep]
+    _warn_short_of_border(verts, edges, attrs, pieces, sources, size, warnings)
     return edges, attrs
 
 
@@ -947,11 +950,9 @@ def _warn_short_of_border(
     size: float,
     warnings: list[str],
 ) -> None:
-    """Step 4 (end): warn about free ends of creases and cuts that stop just short of a closed border."""
+    """Step 4 (end): warn about free ends of creases and cuts that stop just short of the closed border."""
     assign = pieces.assignment[attrs]
     is_b = assign == "B"
-    if not is_b.any() or np.any(np.bincount(edges[is_b].ravel(), minlength=len(verts)) % 2 == 1):
-        return  # no border, or an open one (already reported)
     degree = np.bincount(edges.ravel(), minlength=len(verts))
     ends = np.flatnonzero(degree == 1)
     loose = np.isin(edges, ends) & np.isin(assign, ["M", "V", "U", "C"])[:, None]
@@ -1012,8 +1013,7 @@ def discretize_steps(
     verts, edges, attrs = _planar_arrangement(pieces, merge_tolerance, sources)
     yield "planar arrangement"
     edges, attrs = _remove_duplicates(edges, attrs, pieces, sources, warnings)
-    edges, attrs = _clip_to_border(verts, edges, attrs, pieces, sources, warnings)
-    _warn_short_of_border(verts, edges, attrs, pieces, sources, sheet_size(curves), warnings)
+    edges, attrs = _clip_to_border(verts, edges, attrs, pieces, sources, sheet_size(curves), warnings)
     yield "clipped to the border"
     edges, attrs, _ = _drop_samples_beside_junctions(verts, edges, attrs, pieces, interval, tolerance)  # step 5
     # step 6: straight border pieces between junctions, split evenly

@@ -356,6 +356,9 @@ class Solver:
         halved: list[float] = []
         retried: list[float] = []
 
+        def stalled(r: FoldResult) -> bool:
+            return not r.converged and r.message.startswith("stalled")
+
         def reach(p: float, tolerance: float, halvings: int = 0):
             """Solve at ``p`` from the last state, appending it to ``states``. A stage that stalls ("no descent
             step") is solved again with the exact Hessian from its first iteration (:data:`path.EXACT_RETRY`) and, if
@@ -363,11 +366,11 @@ class Solver:
             x0, t_start = predicted(p)
             self.lm_lambda = states[-1].lm_lambda
             r = yield from stage(x0, t_start, p, tolerance, pinned=not anchor)
-            if path.EXACT_RETRY and not r.converged and r.message.startswith("stalled"):
+            if path.EXACT_RETRY and stalled(r):
                 retried.append(p)  # the stage again, exact Newton from its first iteration
                 self.lm_lambda = states[-1].lm_lambda
                 r = yield from stage(x0, t_start, p, tolerance, pinned=not anchor, tail=math.inf)
-            if not r.converged and r.message.startswith("stalled") and halvings < path.MAX_HALVINGS:
+            if stalled(r) and halvings < path.MAX_HALVINGS:
                 halved.append(p)
                 mid = states[-1].percent + 0.5 * (p - states[-1].percent)
                 half = yield from reach(mid, max(s.tolerance, s.continuation_tolerance), halvings + 1)
@@ -408,10 +411,10 @@ class Solver:
         r.reused_iterations = reused
         r.negative_pivots = negative
         r.simulation_ms = (time.perf_counter() - t0) * 1000.0
-        halves = f", {len(retried)} retried with exact Newton" if retried else ""
-        halves += f", {len(halved)} halved" if halved else ""
-        halves += " after a stall" if retried or halved else ""
-        r.message = f"{r.message} (continuation from the flat sheet in {n} fold-percent steps{halves})"
+        stalls = f", {len(retried)} retried with exact Newton" if retried else ""
+        stalls += f", {len(halved)} halved" if halved else ""
+        stalls += " after a stall" if stalls else ""
+        r.message = f"{r.message} (continuation from the flat sheet in {n} fold-percent steps{stalls})"
         return r
 
     @property

@@ -180,27 +180,7 @@ class FrameCache:
         playback = path_budget is not None
         start, theta = self.start(frame, percent, props, fallback=playback)
         warm_budget = FRAME_MAX_ITERATIONS if playback else WARM_MAX_ITERATIONS
-        budget = path_budget if start is None else warm_budget
-        r = yield from self._frame_solve(solver, frame, percent, start, theta, budget, frame_index, n_frames)
-        iterations = r.iterations - r.reused_iterations  # this frame's, not those of the kept path states
-        if start is not None and not r.converged and not playback:
-            # a bake's warm frame that did not converge in its cap lost its branch: solved from the natural path
-            # with the whole budget, it is the static fold at its percent (as in core.solve.animation)
-            r = yield from self._frame_solve(solver, frame, percent, None, None, None, frame_index, n_frames)
-            iterations += r.iterations - r.reused_iterations
-        entry = CachedFrame(
-            float(percent), settings_key(props), r.positions, r.theta, iterations, r.converged, r.residual
-        )
-        self.frames[int(frame)] = entry
-        return entry
-
-    @staticmethod
-    def _frame_solve(
-        solver, frame: int, percent: float, start, theta, budget: int | None, frame_index: int, n_frames: int
-    ) -> Generator[jobs.Progress, None, object]:
-        """One solve of a frame (warm from ``start``, or from the natural path when it is ``None``), one Newton
-        iteration per unit; returns the solver's result."""
-        steps = solver.solve_steps(percent, start=start, theta_prev=theta, max_iterations=budget)
+        steps = solver.frame_steps(percent, start, theta, warm_budget, path_budget, fall_back=not playback)
         while True:
             try:
                 p = next(steps)
@@ -214,7 +194,12 @@ class FrameCache:
                 yield jobs.Progress("solve", p.iteration, p.residual, positions=p.positions)
         if not np.all(np.isfinite(r.positions)):
             raise FloatingPointError(f"frame {frame}: the solver returned non-finite positions")
-        return r
+        iterations = r.iterations - r.reused_iterations  # this frame's, not those of the kept path states
+        entry = CachedFrame(
+            float(percent), settings_key(props), r.positions, r.theta, iterations, r.converged, r.residual
+        )
+        self.frames[int(frame)] = entry
+        return entry
 
 
 _caches: dict[str, FrameCache] = {}

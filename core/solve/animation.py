@@ -74,21 +74,14 @@ class FoldAnimation:
         """Advance to fold percent ``percent`` (1.0 = 100 %) and return the frame."""
         t0 = time.perf_counter()
         if self.mode == "quasi_static":
-            warm = None
+            start, theta = None, None
             if warm_startable(self.percent, percent, self.solver.settings.continuation_step):
                 start, theta = self._predict(percent)
-                steps = self.solver.solve_steps(
-                    percent, start=start, theta_prev=theta, max_iterations=WARM_MAX_ITERATIONS
-                )
-                warm = run_to_end(steps)
-            if warm is not None and warm.converged:
-                r = warm
-                self._previous = (self.percent, self.positions, self.theta)
-            else:  # from the natural path; its state at the grid point before is the predictor's next anchor
-                r = self.solver.solve(percent)
-                if warm is not None:  # a warm start that did not converge in its cap: the frame is the static fold
-                    r.iterations += warm.iterations
+            r = run_to_end(self.solver.frame_steps(percent, start, theta, WARM_MAX_ITERATIONS))
+            if r.continuation_steps:  # from the natural path; its state at the grid point before is the next anchor
                 self._previous = self.solver.path_state(percent)
+            else:
+                self._previous = (self.percent, self.positions, self.theta)
             self.percent = float(percent)
         else:
             r = self.solver.solve(

@@ -485,6 +485,33 @@ class Solver:
             )
         )
 
+    def frame_steps(
+        self,
+        percent: float,
+        start: np.ndarray | None,
+        theta_prev: np.ndarray | None,
+        warm_iterations: int,
+        path_iterations: int | None = None,
+        fall_back: bool = True,
+    ) -> Generator[SolveProgress, None, FoldResult]:
+        """One frame of a quasi-static animation, sliced like :meth:`solve_steps`: warm from ``start`` (mm, the
+        solved frame before, extrapolated) in at most ``warm_iterations``; from the natural path in at most
+        ``path_iterations`` (default the settings') when ``start`` is ``None`` — and, with ``fall_back``, when the
+        warm solve did not converge in its cap (:data:`.path.WARM_MAX_ITERATIONS`: it lost the branch it followed).
+        A frame from the path is the static fold at ``percent`` (``continuation_steps`` > 0); its ``iterations``
+        count the warm ones too. :class:`.animation.FoldAnimation` and the timeline's frames both solve through
+        here; playback, capped and synchronous, does not fall back."""
+        if start is not None:
+            warm = yield from self.solve_steps(
+                percent, start=start, theta_prev=theta_prev, max_iterations=warm_iterations
+            )
+            if warm.converged or not fall_back:
+                return warm
+        r = yield from self.solve_steps(percent, max_iterations=path_iterations)
+        if start is not None:
+            r.iterations += warm.iterations
+        return r
+
     def _start(self, start: np.ndarray | None, theta_prev: np.ndarray | None, percent: float):
         model = self.model
         x0 = model.rest.copy() if start is None else model.from_mm(start)

@@ -240,6 +240,8 @@ def test_file_frames_inherit_from_parent() -> None:
         ({"edges_vertices": [[0, 1], [1]]}, r"edges_vertices\[1\] = \[1\]: expected 2 vertex indices"),
         ({"edges_assignment": ["B", "B", "X", "B", "V"]}, r"edges_assignment\[2\] = 'X' is not one of"),
         ({"faces_vertices": [[0, 1, 9]]}, r"faces_vertices\[0\] = \[0, 1, 9\]: index 9 out of range"),
+        ({"faces_vertices": [[0, 1, 2], []]}, r"faces_vertices\[1\] = \[\]: a face needs at least 3 vertices"),
+        ({"faces_vertices": [[0, 1]]}, r"faces_vertices\[0\] = \[0, 1\]: a face needs at least 3 vertices"),
         ({"vertices_coords": [[0, 0], [1, 0], [1, "a"], [0, 1]]}, r"vertices_coords\[2\] = \[1, 'a'\]"),
         ({"vertices_coords": [[0, 0], [1, 0], [1], [0, 1]]}, r"vertices_coords\[2\] = \[1\]"),
         ({"edges_foldAngle": [0, 0, 0, 0, "x"]}, r"edges_foldAngle\[4\] = 'x' is not a finite number"),

@@ -17,6 +17,7 @@ import json
 import math
 import re
 import time
+import warnings
 from collections import Counter
 from dataclasses import dataclass
 
@@ -300,9 +301,11 @@ def fold_documents(draw) -> str:
 def read_fold_text(text: str) -> str:
     """Read FOLD text as the command line does; returns "read" or "refused" (any other exception propagates)."""
     try:
-        doc = parse_fold(text, "fuzz.fold")
-        if doc.vertices is not None:
-            pattern_for_folding(doc)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)  # a numpy overflow warning would reach the user too
+            doc = parse_fold(text, "fuzz.fold")
+            if doc.vertices is not None:
+                pattern_for_folding(doc)
     except PatternError:
         return "refused"
     return "read"
@@ -310,8 +313,14 @@ def read_fold_text(text: str) -> str:
 
 SVG_TAGS = ["g", "path", "line", "rect", "circle", "ellipse", "polyline", "polygon", "style", "desc", "defs", "use"]
 SVG_ATTRS = {
-    "d": ["M0 0 L10 10", "M 0,0 C 1 2 3 4 5 6 Z", "m1 1 a5 5 0 1 0 10 0", "M0 0 Q", "L1 1", "M1e400 0", "M0 0 H"],
-    "transform": ["scale(2)", "rotate(30 1 2)", "matrix(1 0 0 1 0 0)", "skewX(90)", "scale(1e308)", "bad(1)"],
+    "d": [
+        *("M0 0 L10 10", "M 0,0 C 1 2 3 4 5 6 Z", "m1 1 a5 5 0 1 0 10 0", "M0 0 Q", "L1 1", "M1e400 0", "M0 0 H"),
+        "M0 0 A 1e300 1e300 0 0 1 1 1",
+    ],
+    "transform": [
+        *("scale(2)", "rotate(30 1 2)", "matrix(1 0 0 1 0 0)", "skewX(90)", "scale(1e308)", "scale(1e200)"),
+        "bad(1)",
+    ],
     "stroke": ["#000", "red", "#0000ff", "rgb(0,255,0)", "yellow", "#f0f", "none", "inherit", "#12"],
     "style": ["stroke:#f00", "stroke:red;opacity:0.5", "display:none", "opacity:nan", ";;:", "stroke-opacity:2"],
     "opacity": ["0.5", "-1", "1e400", "x", "50%"],
@@ -371,8 +380,10 @@ def svg_documents(draw) -> str:
 def read_svg_text(text: str) -> str:
     """Read SVG text and discretise its curves as the command line does; returns "read" or "refused"."""
     try:
-        drawing = parse_svg_text(text, "fuzz.svg")
-        discretize(drawing.curves)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)  # a numpy overflow warning would reach the user too
+            drawing = parse_svg_text(text, "fuzz.svg")
+            discretize(drawing.curves)
     except PatternError:
         return "refused"
     return "read"

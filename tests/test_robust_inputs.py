@@ -14,6 +14,7 @@ import math
 import os
 import re
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -242,6 +243,34 @@ def test_a_circle_skewed_into_an_endless_ellipse_is_refused_at_once() -> None:
     ):
         pattern_of(BORDER + '\n<circle id="c" r="5" transform="skewX(90)" stroke="#f00"/>')
     assert time.perf_counter() - t0 < 1.0
+
+
+@pytest.mark.parametrize(
+    ("body", "message"),
+    [
+        (
+            '<g id="a" transform="scale(1e300)"><g id="b" transform="scale(1e300)"><path d="M1 1 L9 9" stroke="#f00"/>'
+            "</g></g>",
+            r"SVG <g id='b'> \(line 4\): transform 'scale\(1e300\)' scales the drawing beyond floating-point range",
+        ),
+        (
+            '<g id="a" transform="scale(1e999)"><path d="M1 1 L9 9" stroke="#f00"/></g>',
+            r"SVG <g id='a'> \(line 4\): a number out of floating-point range in transform 'scale\(1e999\)'",
+        ),
+        (
+            '<g transform="scale(1e10)"><path id="p" d="M0.001 0 A 1e300 1e300 0 0 1 0.001 0.001" stroke="#f00"/></g>',
+            r"SVG <path id='p'> \(line 4\): an arc with centre or radius inf mm is beyond",
+        ),
+    ],
+)
+def test_transforms_beyond_floating_point_range_get_one_line(body: str, message: str) -> None:
+    """Transforms whose numbers or products leave floating-point range (found by the reader fuzz on numpy 2.5):
+    one line naming the element, and no numpy overflow warning printed before it (nor, for the arc, a LinAlgError
+    traceback from the SVD of an infinite matrix)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(PatternError, match=message):
+            pattern_of(BORDER + "\n" + body)
 
 
 def test_absurd_scale_from_width_and_viewbox() -> None:

@@ -162,6 +162,9 @@ def parse_fold(text: str, source_name: str = "<fold>") -> FoldDocument:
     faces = []
     if "faces_vertices" in data:
         faces = _index_array(data["faces_vertices"], "faces_vertices", src, None, n, "vertices")
+        short = next((i for i, f in enumerate(faces) if len(f) < 3), None)
+        if short is not None:  # a polygon has three corners at least (an empty face broke the cut detection)
+            raise _fail(src, f"faces_vertices[{short}] = {faces[short]!r}: a face needs at least 3 vertices")
     extent = float(np.max(np.ptp(coords, axis=0))) if n else 0.0
     flat_key = PREFIX + "flat_coords"
     frames: list[np.ndarray] = []
@@ -291,8 +294,8 @@ def cut_mask(
             sides = [
                 np.sort(np.column_stack([f, np.roll(f, -1)]), axis=1) for f in map(np.asarray, faces) if len(f) > 1
             ]
-        if sides:
-            s = np.concatenate(sides)
+        s = np.concatenate(sides) if sides else np.zeros((0, 2), dtype=np.int64)
+        if len(s):
             side_keys, counts = np.unique(s[:, 0] * n + s[:, 1], return_counts=True)
             at = np.clip(np.searchsorted(side_keys, keys), 0, len(side_keys) - 1)
             out |= border & (side_keys[at] == keys) & (counts[at] >= 2)

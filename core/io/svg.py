@@ -428,6 +428,8 @@ def parse_transform(value: str, where: str = "transform") -> np.ndarray:
             raise PatternError(f"{where}: cannot read transform {value!r} at {value[pos : pos + 20]!r}")
         name = match.group(1).lower()
         args = [float(x) for x in _NUMBER.findall(match.group(2))]
+        if not all(math.isfinite(x) for x in args):
+            raise PatternError(f"{where}: a number out of floating-point range in transform {value!r}")
         t = np.eye(3)
         n = len(args)
         if name == "matrix" and n == 6:
@@ -455,8 +457,18 @@ def parse_transform(value: str, where: str = "transform") -> np.ndarray:
             t[1, 0] = math.tan(math.radians(args[0]))
         else:
             raise PatternError(f"{where}: {match.group(1)}() with {n} argument(s) in transform {value!r}")
-        m = m @ t
+        m = compose(m, t, where, value)
         pos = match.end()
+    return m
+
+
+def compose(outer: np.ndarray, inner: np.ndarray, where: str, value: str) -> np.ndarray:
+    """``outer @ inner``, refused with one line naming ``where`` if the product leaves floating-point range (nested
+    ``scale(1e300)`` groups): numpy's overflow warnings would otherwise reach the user before a vaguer error."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        m = outer @ inner
+    if not np.all(np.isfinite(m)):
+        raise PatternError(f"{where}: transform {value!r} scales the drawing beyond floating-point range")
     return m
 
 
@@ -671,7 +683,8 @@ def parse_path_data(d: str, where: str, max_segments: int | None = None) -> list
             large, sweep = sc.flag(), sc.flag()
             p = base + (sc.number(), sc.number())
             if not np.array_equal(p, cur):
-                arc = _arc_centre(cur, rx, ry, rot, large, sweep, p)
+                with np.errstate(over="ignore", invalid="ignore"):  # huge radii: refused downstream, with the element
+                    arc = _arc_centre(cur, rx, ry, rot, large, sweep, p)
                 if arc is None:
                     segs.append(("line", cur.copy(), p))
                 else:
@@ -687,7 +700,8 @@ def parse_path_data(d: str, where: str, max_segments: int | None = None) -> list
 
 def _transform_points(m: np.ndarray, pts: np.ndarray) -> np.ndarray:
     pts = np.asarray(pts, dtype=float).reshape(-1, 2)
-    return pts @ m[:2, :2].T + m[:2, 2]
+    with np.errstate(over="ignore", invalid="ignore"):  # out-of-range points are refused, with their element, later
+        return pts @ m[:2, :2].T + m[:2, 2]
 
 
 def _transform_arc(
@@ -702,7 +716,11 @@ def _transform_arc(
     cx, cy, rx, ry, phi, theta0, dtheta = arc
     a = m[:2, :2]
     cphi, sphi = math.cos(phi), math.sin(phi)
-    lin = a @ np.array([[cphi, -sphi], [sphi, cphi]]) @ np.diag([rx, ry])
+    with np.errstate(over="ignore", invalid="ignore"):
+        lin = a @ np.array([[cphi, -sphi], [sphi, cphi]]) @ np.diag([rx, ry])
+    centre = _transform_points(m, np.array([cx, cy]))[0]
+    if not np.all(np.isfinite(lin)):  # radii beyond floating-point range: refused, with the element, downstream
+        return (float(centre[0]), float(centre[1]), math.inf, math.inf, 0.0, theta0, dtheta)
     u, s, vt = np.linalg.svd(lin)
     s = s.astype(float).copy()
     if np.linalg.det(u) < 0:
@@ -716,7 +734,6 @@ def _transform_arc(
     t0, dt = theta0 - psi, dtheta
     if s[1] < 0:
         t0, dt = -t0, -dt
-    centre = _transform_points(m, np.array([cx, cy]))[0]
     return (float(centre[0]), float(centre[1]), float(s[0]), float(abs(s[1])), new_phi, t0, dt)
 
 
@@ -942,7 +959,8 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
         if own.get("display", "").lower() == "none":
             return
         if "transform" in elem.attrib:
-            matrix = matrix @ parse_transform(elem.attrib["transform"], where)
+            value = elem.attrib["transform"]
+            matrix = compose(matrix, parse_transform(value, where), where, value)
         if elem.tag == "use":
             uses.append(elem.line)
             return

@@ -644,6 +644,11 @@ class _Pieces:
     fold_angle: np.ndarray
 
 
+def _a(kind: str) -> str:
+    """A segment kind with its article, for messages ("an arc", "a line")."""
+    return ("an " if kind[:1] in "aeiou" else "a ") + kind
+
+
 def _check_coordinates(curves: list[CreaseCurve]) -> None:
     """Reject non-finite and absurdly large coordinates (one clear line naming the curve).
 
@@ -662,13 +667,13 @@ def _check_coordinates(curves: list[CreaseCurve]) -> None:
     for c in curves:
         for seg in c.segments:
             if not np.all(np.isfinite(seg.points)):
-                raise PatternError(f"{c.source or 'curve'}: non-finite coordinate in a {seg.kind} segment")
+                raise PatternError(f"{c.source or 'curve'}: non-finite coordinate in {_a(seg.kind)} segment")
     for c in curves:
         for seg in c.segments:
             big = float(np.max(np.abs(seg.points)))
             if big > MAX_COORDINATE_MM:
                 raise PatternError(
-                    f"{c.source or 'curve'}: coordinate {big:.3g} mm in a {seg.kind} segment is beyond "
+                    f"{c.source or 'curve'}: coordinate {big:.3g} mm in {_a(seg.kind)} segment is beyond "
                     f"±{MAX_COORDINATE_MM:g} mm (100 km); check the file's units, width/height and viewBox"
                 )
             arc = np.abs(np.asarray(seg.arc[:4], dtype=float)) if seg.arc is not None else np.zeros(0)

@@ -32,6 +32,7 @@ from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
 from .model import BarHingeModel, build_model, with_glue
 from .newton import TAIL_RESIDUAL, Fixed, HessianAssembler, inertia_shift, newton_steps
+from .pose import on_table, reference_triangle
 
 METHODS = ("fast", "faithful", "isometric")
 
@@ -170,6 +171,27 @@ class Solver:
         self.lm_lambda = 1e-3
         self._path_key: tuple[str, int] | None = None  # the settings and pins the kept path states belong to
         self._path_states: dict[float, path.PathState] = {}
+        self._table_face: np.ndarray | None = None
+
+    def _placed(self, positions: np.ndarray) -> np.ndarray:
+        """``positions`` (mm) with the sheet's centre face on the table (:mod:`.pose`), unless pins hold the pose:
+        the placement of a fast solve's result is then a function of its shape alone, not of the path to it."""
+        if self.constraints is not None and len(self.constraints.pins):
+            return positions
+        if self._table_face is None:
+            self._table_face = reference_triangle(self.mesh)
+        return on_table(positions, self.mesh.vertices_3d, self._table_face)
+
+    def _placed_steps(self, steps: Generator[SolveProgress, None, FoldResult]):
+        """``steps`` with every position shown and the result :meth:`_placed` (a live display does not jump)."""
+        while True:
+            try:
+                progress = next(steps)
+            except StopIteration as done:
+                r = done.value
+                r.positions = self._placed(r.positions)
+                return r
+            yield SolveProgress(progress.iteration, progress.residual, self._placed(progress.positions))
 
     @property
     def assembler(self) -> HessianAssembler:
@@ -271,7 +293,9 @@ class Solver:
             )
         if self._continues(start, continuation):
             return run_to_end(self.fold_steps(percent))
-        return run_to_end(self._fast_steps(x0, theta_prev, percent, t0, check_minimum=start is None))
+        return run_to_end(
+            self._placed_steps(self._fast_steps(x0, theta_prev, percent, t0, check_minimum=start is None))
+        )
 
     def _continues(self, start: np.ndarray | None, continuation: bool | None) -> bool:
         if continuation and start is not None:
@@ -299,7 +323,15 @@ class Solver:
         pose, not the shape: the path is then folded free, each state shown posed on the pins, and the last one is
         posed and solved once more with the pins fixed. Held by them all along, Newton had to swing the whole sheet
         about the small anchor at every step (46 iterations against 14 free on examples/single_curve.svg).
+
+        The result and every position shown are placed with the sheet's centre face on the table (:meth:`_placed`).
         """
+        return (yield from self._placed_steps(self._path_steps(percent, max_iterations)))
+
+    def _path_steps(
+        self, percent: float = 1.0, max_iterations: int | None = None
+    ) -> Generator[SolveProgress, None, FoldResult]:
+        """The continuation of :meth:`fold_steps`, its result where the damped steps left it."""
         s = self.settings
         model = self.model
         t0 = time.perf_counter()
@@ -428,13 +460,13 @@ class Solver:
     def path_state(self, percent: float) -> tuple[float, np.ndarray, np.ndarray] | None:
         """``(grid point, positions mm, θ)`` of the natural path's state at the last grid point before ``percent``
         (the flat sheet within the first step), if it has been computed: the predictor's second point for a frame
-        solved from the path."""
+        solved from the path, placed as the frames are (:meth:`_placed`)."""
         g = path.grid_below(percent, self.settings.continuation_step)
         if g == 0.0:
             x, theta = self._start(None, None, percent)
-            return 0.0, self.model.to_mm(x), theta
+            return 0.0, self._placed(self.model.to_mm(x)), theta
         kept = self._path.get(g)
-        return None if kept is None else (g, self.model.to_mm(kept.x), kept.theta)
+        return None if kept is None else (g, self._placed(self.model.to_mm(kept.x)), kept.theta)
 
     def _posed(self, positions: np.ndarray) -> np.ndarray:
         """Free-fold ``positions`` (mm) posed on the pins (:meth:`.Constraints.pose`, from the flat sheet)."""
@@ -480,8 +512,10 @@ class Solver:
         t0 = time.perf_counter()
         x0, theta_prev = self._start(start, theta_prev, percent)
         return (
-            yield from self._fast_steps(
-                x0, theta_prev, percent, t0, max_iterations=max_iterations, check_minimum=start is None
+            yield from self._placed_steps(
+                self._fast_steps(
+                    x0, theta_prev, percent, t0, max_iterations=max_iterations, check_minimum=start is None
+                )
             )
         )
 

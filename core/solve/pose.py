@@ -1,0 +1,56 @@
+"""Where a folded sheet sits in space: its centre face stays on the table.
+
+The bar-and-hinge energy does not change when the whole sheet moves rigidly, so a solve leaves the sheet wherever
+its damped steps happened to carry it. That placement depends on the path: the static fold at 100 % (four
+continuation steps) and the last frame of a 30-frame animation had the same shape to 1e-8 but sat 0.75–2.4 mm apart
+(0.7–2.4 % of the sheet), so a baked animation jumped away from the Fold it ends on, and a glTF animation did not
+line up with an OBJ or FOLD export of the static fold.
+
+Origami software fixes one face (ORIPA's and Rabbit Ear's "fixed face"); so do we. The reference face is the mesh
+triangle nearest the sheet's centre among the well-shaped ones (smallest corner at least :data:`SHAPE_DEG`, or the
+best-shaped ones if there are none; of several as near, the first by index); every fast solve's result is moved
+rigidly so that this triangle lies where it was drawn, as well as its strain allows (a least-squares fit of its
+three corners). The placement is then a function of the shape alone: the same for a static fold, an animation frame
+and a live re-fold, on every front door. A single triangle is always well conditioned, where a best fit of the whole
+folded sheet to the flat one is not (a sheet folded in half has no preferred turn about its crease). Pins decide the
+pose themselves and are left alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..mesh.fold_mesh import FoldMesh
+from .constraints import rigid_fit
+
+SHAPE_DEG = 30.0
+"""Triangles whose smallest corner is at least this (degrees) may hold the sheet; slivers would tilt with strain."""
+
+NEAR_FRACTION = 1e-3
+"""Triangles this close (÷ the sheet's size) to the nearest one are as near the centre: the first by index holds it."""
+
+
+def reference_triangle(mesh: FoldMesh) -> np.ndarray:
+    """The three vertex indices of the face that stays on the table (see the module docstring)."""
+    tri = np.asarray(mesh.triangles, dtype=np.int64)
+    p = np.asarray(mesh.vertices_3d, dtype=np.float64)[tri]  # (t, 3 corners, 3)
+    edges = np.roll(p, -1, axis=1) - p  # corner k to k + 1
+    a, b = -np.roll(edges, 1, axis=1), edges  # the two sides leaving each corner
+    cos = np.sum(a * b, axis=2) / np.maximum(np.linalg.norm(a, axis=2) * np.linalg.norm(b, axis=2), 1e-300)
+    smallest = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).min(axis=1)
+    area = 0.5 * np.linalg.norm(np.cross(edges[:, 0], -edges[:, 2]), axis=1)
+    centre = (p.mean(axis=1) * area[:, None]).sum(axis=0) / max(float(area.sum()), 1e-300)
+    good = smallest >= min(SHAPE_DEG, float(smallest.max()))
+    distance = np.where(good, np.linalg.norm(p.mean(axis=1) - centre, axis=1), np.inf)
+    # a symmetric pattern has several triangles at the same distance: the first of them by index, so that float32
+    # copies of the sheet (a Blender mesh) choose the same one as the float64 pattern
+    near = distance <= distance.min() + NEAR_FRACTION * float(np.ptp(p.reshape(-1, 3), axis=0).max())
+    return tri[int(np.flatnonzero(near)[0])]
+
+
+def on_table(positions: np.ndarray, flat: np.ndarray, triangle: np.ndarray) -> np.ndarray:
+    """``positions`` ``(n, 3)`` mm moved rigidly so that ``triangle``'s corners come closest to where they are in
+    ``flat`` (least squares; exactly there when the triangle is unstrained)."""
+    p = np.asarray(positions, dtype=np.float64)
+    rot, shift = rigid_fit(p[triangle], np.asarray(flat, dtype=np.float64)[triangle])
+    return p @ rot + shift

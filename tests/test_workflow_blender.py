@@ -374,14 +374,7 @@ def test_a_bake_ends_where_fold_does_on_a_pattern_with_several_minima(extension,
     props.fold_percent = 60.0
     assert bpy.ops.curved_fold.refold() == {"FINISHED"}
     static = mesh_positions(ob)
-    props.keyframe_insert("fold_percent", frame=6)
-    props.fold_percent = 0.0
-    props.keyframe_insert("fold_percent", frame=1)
-    scene = bpy.context.scene
-    scene.frame_start, scene.frame_end = 1, 6
-    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
-    scene.frame_set(6)
-    last = mesh_positions(ob.evaluated_get(bpy.context.evaluated_depsgraph_get()))
+    last = bake_from_flat(ob, 6)
     diag = float(np.linalg.norm(np.ptp(static, axis=0)))
     assert ext_module(extension, "core.solve.solver").rigid_rms(last, static) / diag <= 1e-3
 
@@ -394,18 +387,24 @@ def test_a_bake_ends_where_fold_put_the_sheet(extension, clean_scene):
     the star's symmetry puts several faces as near its centre, and the float32 mesh chooses the pattern's."""
     ob = fold_fixture("Rotating_Star.svg")
     static = mesh_positions(ob)
-    props = ob.curved_fold_mesh
-    props.keyframe_insert("fold_percent", frame=20)
-    props.fold_percent = 0.0
-    props.keyframe_insert("fold_percent", frame=1)
-    scene = bpy.context.scene
-    scene.frame_start, scene.frame_end = 1, 20
-    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
-    scene.frame_set(20)
-    last = mesh_positions(ob.evaluated_get(bpy.context.evaluated_depsgraph_get()))
+    last = bake_from_flat(ob, 20)
     diag = float(np.linalg.norm(np.ptp(static, axis=0)))
     rms = float(np.sqrt(np.mean(np.sum((last - static) ** 2, axis=1))))
     assert rms <= 1e-4 * diag  # as the issue's static fold against the last frame, here without any alignment
+
+
+def bake_from_flat(ob, frames: int) -> np.ndarray:
+    """Keyframe ``ob``'s Fold Percent from 0 at frame 1 to its current value at ``frames``, bake through the
+    operator, and return the evaluated mesh's positions (mm) at the last frame."""
+    props = ob.curved_fold_mesh
+    props.keyframe_insert("fold_percent", frame=frames)
+    props.fold_percent = 0.0
+    props.keyframe_insert("fold_percent", frame=1)
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, frames
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    scene.frame_set(frames)
+    return mesh_positions(ob.evaluated_get(bpy.context.evaluated_depsgraph_get()))
 
 
 def mesh_positions(ob) -> np.ndarray:

@@ -161,9 +161,11 @@ def run(args: argparse.Namespace) -> int:
         f"{r['solver']} solver {r['simulation_ms']:.0f} ms, {r['iterations']} iterations, "
         f"{'converged' if r['converged'] else 'NOT converged'} (residual {r['residual']:.1e})"
     )
+    warp = r["warp_mean_deg"]  # None (nan) when no panel edge bends the authors' 0.5°: at 0 %, or rigid panels
+    warp_text = f"warp mean {warp:.2f}°" if warp is not None and math.isfinite(warp) else "no warp (panels flat)"
     print(
-        f"strain mean {r['strain_mean_pct']:.3f} % max {r['strain_max_pct']:.3f} %, warp mean "
-        f"{r['warp_mean_deg']:.2f}°, fold-angle error {r['fold_angle_error_mean_deg']:.2f}° → {out}"
+        f"strain mean {r['strain_mean_pct']:.3f} % max {r['strain_max_pct']:.3f} %, {warp_text}, "
+        f"fold-angle error {r['fold_angle_error_mean_deg']:.2f}° → {out}"
     )
     crossing = r.get("self_intersecting_faces")
     if crossing is not None:

@@ -86,6 +86,22 @@ def test_cli_names_the_users_file_not_the_temporary_ones(tmp_path, capfd):
     assert ".tmp" not in printed and str(out) in printed, printed
 
 
+def test_cli_summary_says_no_warp_instead_of_nan(tmp_path, capfd):
+    """At 0 % no panel edge bends the authors' 0.5°, so there is no warp angle to average: the summary line says so
+    (it printed "warp mean nan°"), and the report keeps null."""
+    from curved_fold.cli import main
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    out, rep = tmp_path / "flat.fold", tmp_path / "flat.json"
+    assert (
+        main(["fold", str(examples / "single_curve.svg"), "--out", str(out), "--percent", "0", "--report", str(rep)])
+        == 0
+    )
+    printed = capfd.readouterr().out
+    assert "nan" not in printed and "no warp (panels flat)" in printed, printed
+    assert json.loads(rep.read_text())["warp_mean_deg"] is None
+
+
 def test_cli_rejects_unknown_output_suffix(tmp_path, capsys):
     from curved_fold.cli import main
 

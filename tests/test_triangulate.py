@@ -3,6 +3,7 @@ patterns, the analytic cases and the Origami Simulator fixtures."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -213,6 +214,14 @@ def _flaps_pattern(sides: str) -> CreasePattern:
     return discretize(parse_svg_text(flaps_svg(sides=sides), "flaps.svg").curves)
 
 
+def test_an_outline_drawn_as_cuts_is_not_said_to_stop_folding() -> None:
+    """Flaps whose sides are drawn as cuts (green), no border: the sides become the border as with creases, but the
+    warning does not say that cuts "no longer fold" (they never folded); it says they are all cuts."""
+    cut = build_mesh(_flaps_pattern("#00ff00"), "ruling")
+    said = [w for w in cut.warnings if "took the outer boundary" in w]
+    assert len(said) == 1 and said[0].endswith(", all cuts)") and "no longer fold" not in said[0], said
+
+
 def _by_position(mesh, values: np.ndarray) -> np.ndarray:
     order = np.lexsort(mesh.vertices.T[::-1])
     return values[order]
@@ -224,6 +233,7 @@ def test_pattern_without_border_takes_the_outer_boundary_as_border() -> None:
     bare = build_mesh(_flaps_pattern("#ff0000"), "ruling")
     drawn = build_mesh(_flaps_pattern("#000000"), "ruling")
     assert any("no border (B) segments drawn: took the outer boundary" in w for w in bare.warnings)
+    assert any(re.search(r"the \d+ crease segment\(s\) among them no longer fold\)$", w) for w in bare.warnings)
     assert not any("outer boundary" in w for w in drawn.warnings)
     assert bare.n_vertices == drawn.n_vertices and bare.n_faces == drawn.n_faces
     assert np.allclose(_by_position(bare, bare.vertices), _by_position(drawn, drawn.vertices))

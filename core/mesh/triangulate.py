@@ -672,9 +672,11 @@ def constrained_triangulation(pattern: CreasePattern, backend: str = "auto") -> 
             {pattern.sources[pattern.edge_polyline[k]] for k in outline_edges.tolist()} if pattern.sources else set()
         )
         shown = ", ".join(names[:4]) + (f" and {len(names) - 4} more" if len(names) > 4 else "")
+        creases = int(np.count_nonzero(pattern.assignments[outline_edges] != "C"))  # cuts never folded anyway
+        lost = f"; the {creases} crease segment(s) among them no longer fold" if creases else ", all cuts"
         warnings.append(
             f"no border (B) segments drawn: took the outer boundary of the drawn segments as the border, as Origami "
-            f"Simulator does ({len(outline_edges)} segment(s){', from ' + shown if shown else ''}; they no longer fold)"
+            f"Simulator does ({len(outline_edges)} segment(s){', from ' + shown if shown else ''}{lost})"
         )
     tris = tris[keep_tri]
     tri_region, n_faces = _renumber_regions(region[keep_tri])

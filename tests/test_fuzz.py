@@ -331,6 +331,7 @@ SVG_ATTRS = {
     "r": ["5", "0", "-1"],
     "class": ["a", "b c"],
     "id": ["a", "b"],
+    "href": ["#a", "#b", "#missing", "a"],
 }
 CSS_TEXTS = [
     "a{",

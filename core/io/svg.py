@@ -9,6 +9,9 @@ What is read:
   reflection, several sub-paths), ``line``, ``polyline``, ``polygon``, ``rect`` (rounded corners become arcs),
   ``circle`` and ``ellipse``; contents of ``defs``/``symbol``/``clipPath``/``mask``/``metadata``/... are skipped;
 * nested ``transform`` lists (``matrix translate scale rotate skewX skewY``), applied innermost first;
+* clones: ``<use href="#id">`` (or ``xlink:href``) draws the element it names (a ``<symbol>`` too) moved by its
+  ``transform`` then ``x``/``y``, inheriting the use's stroke; a use that names nothing or would draw itself again
+  is skipped with a warning, and the copies count against the element limit (nested uses cannot multiply them);
 * the stroke colour, which gives the assignment by EXACT match with Origami Simulator's table (any CSS spelling of
   those rgb values); ``opacity × stroke-opacity × 180°`` gives the fold angle (mountain negative);
 * presentation attributes < ``<style>`` rules (type, ``.class``, ``#id`` selectors, comma lists) < inline ``style``;
@@ -917,6 +920,27 @@ def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float]:
 # ----------------------------------------------------------------------------------------------------- reading
 
 
+def _href(use: _Element) -> str:
+    """The id a ``<use>`` names (``href`` or ``xlink:href`` = ``#id``), or "" when it names none in this file."""
+    ref = use.attrib.get("href") or use.attrib.get("http://www.w3.org/1999/xlink}href") or ""
+    return ref.strip()[1:] if ref.strip().startswith("#") else ""
+
+
+def _self_and_ancestors(elem: _Element, parents: dict[int, _Element]) -> list[_Element]:
+    """``elem`` and its ancestors in the document (at most limits.NESTING of them)."""
+    out = [elem]
+    while id(out[-1]) in parents:
+        out.append(parents[id(out[-1])])
+    return out
+
+
+def _lines(lines: list[int]) -> str:
+    """``line 7`` or ``lines 7, 8, … and 2 more`` (each line once, at most eight listed)."""
+    lines = list(dict.fromkeys(lines))
+    shown = ", ".join(map(str, lines[:8])) + (f" and {len(lines) - 8} more" if len(lines) > 8 else "")
+    return f"line {shown}" if len(lines) == 1 else f"lines {shown}"
+
+
 def _describe(elem: _Element) -> str:
     ident = elem.attrib.get("id")
     tag = f"<{elem.tag} id='{ident}'>" if ident else f"<{elem.tag}>"
@@ -931,9 +955,15 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
     warnings: list[str] = []
     rules: list[_Rule] = []
 
+    ids: dict[str, _Element] = {}  # the targets of <use> (the first element of each id, as browsers take it)
+    parents: dict[int, _Element] = {}  # id(element) → its parent, to refuse a <use> inside what it names
     pending = [root]  # document order, with an explicit stack (nesting depth is bounded by limits.NESTING anyway)
     while pending:
         elem = pending.pop()
+        if "id" in elem.attrib:
+            ids.setdefault(elem.attrib["id"], elem)
+        for child in elem.children:
+            parents[id(child)] = elem
         if elem.tag == "style":
             rules.extend(_parse_stylesheet(elem.text, warnings, f"{source_name} <style> (line {elem.line})"))
         pending.extend(reversed(elem.children))
@@ -942,15 +972,22 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
     viewport, width_mm, height_mm = _viewport(root, source_name)
     curves: list[CreaseCurve] = []
     unknown: dict[str, list[int]] = {}
-    uses: list[int] = []
+    unresolved: list[int] = []  # lines of <use> elements whose href names no element
+    cycles: list[int] = []  # lines of <use> elements that would draw themselves again
     segment_budget = limits.PATH_SEGMENTS.value
+    visits_left = limits.SVG_ELEMENTS.value  # elements drawn, clones included: nested <use> cannot multiply them
 
-    def visit(elem: _Element, matrix: np.ndarray, inherited: dict[str, str]) -> None:
-        """Read one element; its children go on ``todo`` (an explicit stack, not recursion)."""
-        nonlocal segment_budget
-        if elem.tag.startswith("#foreign:") or elem.tag in SKIPPED_CONTAINERS:
+    def visit(elem: _Element, matrix: np.ndarray, inherited: dict[str, str], via: tuple[_Element, ...] = ()) -> None:
+        """Read one element; its children go on ``todo`` (an explicit stack, not recursion). ``via``: the <use>
+        elements this copy is drawn through, innermost last (none for the element in its own place)."""
+        nonlocal segment_budget, visits_left
+        used = bool(via) and elem is ids.get(_href(via[-1]))  # the target of a <use>: a <symbol> is drawn there
+        if elem.tag.startswith("#foreign:") or (elem.tag in SKIPPED_CONTAINERS and not (used and elem.tag == "symbol")):
             return
-        where = _describe(elem)
+        visits_left -= 1
+        if visits_left < 0:
+            limits.SVG_ELEMENTS.check(limits.SVG_ELEMENTS.value - visits_left, f"{source_name} (<use> copies included)")
+        where = _describe(elem) + "".join(f" via <use> (line {u.line})" for u in reversed(via))
         own = _own_style(elem, rules)
         style = dict(inherited)
         for key in INHERITED:
@@ -961,8 +998,16 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
         if "transform" in elem.attrib:
             value = elem.attrib["transform"]
             matrix = compose(matrix, parse_transform(value, where), where, value)
-        if elem.tag == "use":
-            uses.append(elem.line)
+        if elem.tag == "use":  # a clone (Inkscape's Edit ▸ Clone): the element it names, moved by x, y
+            target = ids.get(_href(elem))
+            if target is None:
+                unresolved.append(elem.line)
+            elif any(target is a for u in (elem, *via) for a in _self_and_ancestors(u, parents)):
+                cycles.append(elem.line)
+            else:
+                x, y = _attr_float(elem, "x", where), _attr_float(elem, "y", where)
+                shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
+                todo.append((target, compose(matrix, shift, where, f"x={x:g} y={y:g}"), style, (*via, elem)))
             return
         if elem.tag in SHAPES:
             stroke = style.get("stroke")
@@ -993,9 +1038,9 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
                 segments = [_to_segment(r, matrix) for r in raw_segs]
                 curves.append(CreaseCurve(segments, assignment, angle, closed=closed, source=source))
             return
-        todo.extend((child, matrix, style) for child in reversed(elem.children))
+        todo.extend((child, matrix, style, via) for child in reversed(elem.children))
 
-    todo: list[tuple[_Element, np.ndarray, dict[str, str]]] = [(root, viewport, {})]
+    todo: list[tuple[_Element, np.ndarray, dict[str, str], tuple[_Element, ...]]] = [(root, viewport, {}, ())]
     while todo:
         visit(*todo.pop())
     if unknown:
@@ -1006,8 +1051,14 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
             label = "lines" if len(lines) > 1 else "line"
             parts.append(f"{colour} ({len(lines)} {noun}: {label} {shown})")
         warnings.append(f"{source_name}: unknown stroke colours (elements skipped): " + ", ".join(parts))
-    if uses:
-        warnings.append(f"{source_name}: <use> elements are not followed (lines {', '.join(map(str, uses[:8]))})")
+    if unresolved:
+        warnings.append(
+            f"{source_name}: <use> elements that name no element of the file are skipped ({_lines(unresolved)})"
+        )
+    if cycles:
+        warnings.append(
+            f"{source_name}: <use> elements that would draw themselves again are skipped ({_lines(cycles)})"
+        )
     if not curves:
         raise PatternError(
             f"{source_name}: no usable crease element (path/line/polyline/polygon/rect/circle/ellipse with a stroke "

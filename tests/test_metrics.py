@@ -187,7 +187,7 @@ def test_verdict_on_given_angles_names_flat_and_wrong_way_creases_by_length() ->
     flat[arc2] *= 0.45  # under half its target: stays flat
     v = verdict(mesh, flat, 1.0)
     assert v["creases_not_folding"][0]["flat_mm"] == pytest.approx(length)
-    assert "stay flat" in v["does_not_fold_message"]
+    assert "fold less than half" in v["does_not_fold_message"] and "stay flat" not in v["does_not_fold_message"]
     flat[arc2] = theta[arc2] * 0.55  # over half: folded, although the mean error is large
     assert verdict(mesh, flat, 1.0)["does_not_fold_as_assigned"] is False
 

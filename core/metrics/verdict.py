@@ -7,7 +7,8 @@ So the verdict names creases, by length, as a designer would look for them:
 
 * a crease piece (mesh edge of an M/V crease with a target) **folds the wrong way** when its simulated angle has the
   opposite sign of its target and is beyond :data:`WRONG_WAY_DEG`;
-* it **stays flat** when it folds less than :data:`FOLDED_FRACTION` of its target at this fold percent, the target
+* it **stays flat** (the message says "folds less than half": a designer reads "flat" literally, and a crease at 45°
+  of 90° is not) when it folds less than :data:`FOLDED_FRACTION` of its target at this fold percent, the target
   counted at most :data:`REACHABLE_DEG` (curved creases fall far short of targets near 180°: ``Carved_Cylinder``'s
   180° creases reach 80–130°, and that is folded);
 * a drawn crease (one polyline of the input) **does not fold** when more than half of its length stays flat or folds
@@ -165,9 +166,9 @@ def _describe(c: dict[str, Any]) -> str:
     if c["wrong_way_mm"] > 0:
         how.append(f"{c['wrong_way_mm']:.1f} mm fold the wrong way")
     if c["flat_mm"] > 0:
-        how.append(f"{c['flat_mm']:.1f} mm stay flat")
+        how.append(f"{c['flat_mm']:.1f} mm fold less than half")  # the paper's "stay flat", as measured
     return (
-        f"{c['crease']}: {' and '.join(how)} of {c['length_mm']:.1f} mm (folded {c['angle_deg']:.0f}° for "
+        f"{c['crease']}: of its {c['length_mm']:.1f} mm, {' and '.join(how)} (folded {c['angle_deg']:.0f}° for "
         f"{c['target_deg']:.0f}°), around ({c['at_mm'][0]:.1f}, {c['at_mm'][1]:.1f}) mm"
     )
 
@@ -206,8 +207,8 @@ def verdict(mesh: FoldMesh, fold_angles: np.ndarray, percent: float) -> dict[str
             listed = "; ".join(_describe(c) for c in bad[:LISTED])
             more = f"; and {len(bad) - LISTED} more" if len(bad) > LISTED else ""
             parts.append(
-                f"{len(bad)} crease(s), {100 * share:.0f} % of the crease length, stay flat or fold the wrong way: "
-                f"{listed}{more}"
+                f"{len(bad)} crease(s), {100 * share:.0f} % of the crease length, fold less than half or the wrong "
+                f"way: {listed}{more}"
             )
         if ends:
             listed = "; ".join(

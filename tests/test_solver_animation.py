@@ -146,3 +146,34 @@ def test_the_last_frame_sits_where_the_static_fold_does():
     assert np.abs(last.positions - static).max() <= 1e-5 * mesh.diagonal
     face = reference_triangle(mesh)
     assert np.abs(static[face] - mesh.vertices_3d[face]).max() <= 1e-3 * mesh.diagonal
+
+
+DISC_SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" viewBox="0 0 100 100">
+<rect x="0" y="0" width="100" height="100" stroke="#000" fill="none"/>
+<circle cx="50" cy="50" r="20" stroke="#0f0" fill="none"/>
+<path d="M 0 10 C 30 20, 70 0, 100 10" stroke="#00f" stroke-opacity="0.5" fill="none"/>
+<path d="M 35 40 C 45 55, 55 45, 65 60" stroke="#f00" stroke-opacity="0.5" fill="none"/>
+</svg>"""
+
+
+def test_a_loose_piece_rests_on_its_own_centre_face():
+    """A hole drawn as a closed cut leaves a loose disc (warned), folding on its own: it rests on its own centre face,
+    so it too sits in the same place in the last frame as in the static fold (placed with the sheet's face, it kept
+    the drift of its path)."""
+    from curved_fold.core.io.svg import parse_svg_text
+    from curved_fold.core.mesh.build import build_mesh
+    from curved_fold.core.pattern.discretize import discretize
+    from curved_fold.core.solve.pose import resting_pieces
+    from curved_fold.core.solve.solver import Solver
+
+    mesh = build_mesh(discretize(parse_svg_text(DISC_SVG, "disc.svg").curves))
+    pieces = resting_pieces(mesh)
+    assert sorted(len(v) for v, _ in pieces) == [76, 168]
+    static = Solver(mesh, SolverSettings()).solve(1.0).positions
+    anim = FoldAnimation(mesh, SolverSettings())
+    for k in range(1, 21):
+        last = anim.frame(k / 20)
+    assert last.converged
+    assert np.abs(last.positions - static).max() <= 1e-4 * mesh.diagonal
+    for _, face in pieces:
+        assert np.abs(static[face] - mesh.vertices_3d[face]).max() <= 1e-3 * mesh.diagonal

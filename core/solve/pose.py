@@ -13,7 +13,8 @@ rigidly so that this triangle lies where it was drawn, as well as its strain all
 three corners). The placement is then a function of the shape alone: the same for a static fold, an animation frame
 and a live re-fold, on every front door. A single triangle is always well conditioned, where a best fit of the whole
 folded sheet to the flat one is not (a sheet folded in half has no preferred turn about its crease). Pins decide the
-pose themselves and are left alone.
+pose themselves and are left alone. A sheet in several pieces (a hole drawn as a closed cut leaves a loose disc)
+places each piece on its own centre face, unless glue joins them (then the whole sheet moves as one).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh
+from ..mesh.triangulate import connected_components
 from .constraints import rigid_fit
 
 SHAPE_DEG = 30.0
@@ -31,7 +33,27 @@ NEAR_FRACTION = 1e-3
 
 
 def reference_triangle(mesh: FoldMesh) -> np.ndarray:
-    """The three vertex indices of the face that stays on the table (see the module docstring)."""
+    """The three vertex indices of the face that holds the whole sheet (see the module docstring)."""
+    return _centre_triangles(mesh, np.zeros(len(mesh.triangles), dtype=np.int64))[0]
+
+
+def resting_pieces(mesh: FoldMesh, together: bool = False) -> list[tuple[np.ndarray | None, np.ndarray]]:
+    """Per piece of the sheet (its triangles joined by edges; a cut can leave a loose disc), the vertices it moves
+    (``None``: all, when there is one piece) and the triangle that holds it on the table. ``together``: one
+    placement for all (pieces glued to each other move as one)."""
+    tri = np.asarray(mesh.triangles, dtype=np.int64)
+    if together:
+        return [(None, reference_triangle(mesh))]
+    label = connected_components(mesh.n_vertices, tri[:, [0, 1, 2]].ravel(), tri[:, [1, 2, 0]].ravel())
+    pieces, group = np.unique(label[tri[:, 0]], return_inverse=True)
+    held = _centre_triangles(mesh, group.reshape(-1))
+    if len(pieces) == 1:
+        return [(None, held[0])]
+    return [(np.flatnonzero(label == lab), held[k]) for k, lab in enumerate(pieces.tolist())]
+
+
+def _centre_triangles(mesh: FoldMesh, group: np.ndarray) -> list[np.ndarray]:
+    """For each group of triangles (``group[t]`` = 0, 1, …), its well-shaped triangle nearest its area centroid."""
     tri = np.asarray(mesh.triangles, dtype=np.int64)
     p = np.asarray(mesh.vertices_3d, dtype=np.float64)[tri]  # (t, 3 corners, 3)
     edges = np.roll(p, -1, axis=1) - p  # corner k to k + 1
@@ -39,18 +61,31 @@ def reference_triangle(mesh: FoldMesh) -> np.ndarray:
     cos = np.sum(a * b, axis=2) / np.maximum(np.linalg.norm(a, axis=2) * np.linalg.norm(b, axis=2), 1e-300)
     smallest = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).min(axis=1)
     area = 0.5 * np.linalg.norm(np.cross(edges[:, 0], -edges[:, 2]), axis=1)
-    centre = (p.mean(axis=1) * area[:, None]).sum(axis=0) / max(float(area.sum()), 1e-300)
-    good = smallest >= min(SHAPE_DEG, float(smallest.max()))
-    distance = np.where(good, np.linalg.norm(p.mean(axis=1) - centre, axis=1), np.inf)
-    # a symmetric pattern has several triangles at the same distance: the first of them by index, so that float32
-    # copies of the sheet (a Blender mesh) choose the same one as the float64 pattern
-    near = distance <= distance.min() + NEAR_FRACTION * float(np.ptp(p.reshape(-1, 3), axis=0).max())
-    return tri[int(np.flatnonzero(near)[0])]
+    middle = p.mean(axis=1)
+    size = float(np.ptp(p.reshape(-1, 3), axis=0).max())
+    out = []
+    for g in range(int(group.max()) + 1 if len(group) else 0):
+        mine = group == g
+        centre = (middle[mine] * area[mine, None]).sum(axis=0) / max(float(area[mine].sum()), 1e-300)
+        good = mine & (smallest >= min(SHAPE_DEG, float(smallest[mine].max())))
+        distance = np.where(good, np.linalg.norm(middle - centre, axis=1), np.inf)
+        # a symmetric pattern has several triangles at the same distance: the first of them by index, so that
+        # float32 copies of the sheet (a Blender mesh) choose the same one as the float64 pattern
+        near = distance <= distance.min() + NEAR_FRACTION * size
+        out.append(tri[int(np.flatnonzero(near)[0])])
+    return out
 
 
-def on_table(positions: np.ndarray, flat: np.ndarray, triangle: np.ndarray) -> np.ndarray:
-    """``positions`` ``(n, 3)`` mm moved rigidly so that ``triangle``'s corners come closest to where they are in
-    ``flat`` (least squares; exactly there when the triangle is unstrained)."""
+def on_table(positions: np.ndarray, flat: np.ndarray, pieces: list[tuple[np.ndarray | None, np.ndarray]]) -> np.ndarray:
+    """``positions`` ``(n, 3)`` mm with each piece (:func:`resting_pieces`) moved rigidly so that its triangle's
+    corners come closest to where they are in ``flat`` (least squares; exactly there when unstrained)."""
     p = np.asarray(positions, dtype=np.float64)
-    rot, shift = rigid_fit(p[triangle], np.asarray(flat, dtype=np.float64)[triangle])
-    return p @ rot + shift
+    flat = np.asarray(flat, dtype=np.float64)
+    out = p.copy() if len(pieces) > 1 else p
+    for vertices, triangle in pieces:
+        rot, shift = rigid_fit(p[triangle], flat[triangle])
+        if vertices is None:
+            out = p @ rot + shift
+        else:
+            out[vertices] = p[vertices] @ rot + shift
+    return out

@@ -32,7 +32,7 @@ from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
 from .model import BarHingeModel, build_model, with_glue
 from .newton import TAIL_RESIDUAL, Fixed, HessianAssembler, inertia_shift, newton_steps
-from .pose import on_table, reference_triangle
+from .pose import on_table, resting_pieces
 
 METHODS = ("fast", "faithful", "isometric")
 
@@ -171,16 +171,17 @@ class Solver:
         self.lm_lambda = 1e-3
         self._path_key: tuple[str, int] | None = None  # the settings and pins the kept path states belong to
         self._path_states: dict[float, path.PathState] = {}
-        self._table_face: np.ndarray | None = None
+        self._resting: list[tuple[np.ndarray | None, np.ndarray]] | None = None
 
     def _placed(self, positions: np.ndarray) -> np.ndarray:
         """``positions`` (mm) with the sheet's centre face on the table (:mod:`.pose`), unless pins hold the pose:
         the placement of a fast solve's result is then a function of its shape alone, not of the path to it."""
         if self.constraints is not None and len(self.constraints.pins):
             return positions
-        if self._table_face is None:
-            self._table_face = reference_triangle(self.mesh)
-        return on_table(positions, self.mesh.vertices_3d, self._table_face)
+        if self._resting is None:
+            glued = self.constraints is not None and len(self.constraints.glue) > 0
+            self._resting = resting_pieces(self.mesh, together=glued)
+        return on_table(positions, self.mesh.vertices_3d, self._resting)
 
     def _placed_steps(self, steps: Generator[SolveProgress, None, FoldResult]):
         """``steps`` with every position shown and the result :meth:`_placed` (a live display does not jump)."""

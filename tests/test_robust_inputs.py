@@ -502,6 +502,26 @@ def test_all_mountains_does_not_fold_as_assigned_and_stays_stable() -> None:
     assert report["does_not_fold_as_assigned"] is True
     assert "does not fold as assigned" in report["does_not_fold_message"]
     assert report["strain_max_pct"] < 50
+    assert "triangles have corners down to" not in report["does_not_fold_message"]  # its mesh is fine: the design
+
+
+def test_a_tiny_flap_on_a_big_sheet_is_said_to_be_meshed_thinly() -> None:
+    """A 4 mm flap on a 500 mm sheet (a helper's drawing): without interior points its chords fan to border vertices
+    45–250 mm away (corners of 0.7°), and it folds -38° of -150°. The verdict names it, and says that its triangles
+    are slivers, so a designer looks at the mesh (a 2 mm interval folds it), not at the design."""
+    text = svg(
+        '<rect x="0" y="0" width="500" height="500" stroke="#000" fill="none"/>\n'
+        '<path id="flap" d="M0,46.0 A4.0,4.0 0 0 1 0,54.0" stroke="#f00" opacity="0.833" fill="none"/>',
+        size='width="500mm" height="500mm" viewBox="0 0 500 500"',
+    )
+    report = fold_pattern(discretize(parse_svg_text(text, "flap.svg").curves)).report
+    assert report["converged"] and report["does_not_fold_as_assigned"]
+    (flap,) = report["creases_not_folding"]
+    assert flap["smallest_corner_deg"] < 1.0
+    assert re.search(
+        r"<path id='flap'> .*; its triangles have corners down to 0\.\d\d° \(a smaller interval may mesh it",
+        report["does_not_fold_message"],
+    )
 
 
 def test_dangling_crease_does_not_fold_as_assigned() -> None:

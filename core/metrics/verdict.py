@@ -26,11 +26,13 @@ mid-point of its pieces that do not fold, in the mesh's millimetres).
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh
+from .mesh_quality import SLIVER_DEG, corner_angles
 
 FOLDED_FRACTION = 0.5
 """A crease piece folded less than this fraction of its (capped) target at the fold percent stays flat."""
@@ -87,9 +89,11 @@ def creases_not_folding(mesh: FoldMesh, fold_angles: np.ndarray, percent: float)
     mean_target = np.bincount(inv, weights=length * pcs["target"], minlength=len(ids)) / np.maximum(total, 1e-300)
     bad = (flat_len + wrong_len) > NOT_FOLDING_SHARE * total
     mid = mesh.vertices[mesh.edges[pcs["edge"]]].mean(axis=1)
+    beside = _smallest_corner_beside(mesh, pcs["edge"])
     out = []
     for k in np.flatnonzero(bad).tolist():
         pieces = (inv == k) & (pcs["flat"] | pcs["wrong_way"])
+        corner = float(beside[pieces].min())
         centre = np.average(mid[pieces], axis=0, weights=length[pieces])
         at = mid[pieces][np.argmin(np.linalg.norm(mid[pieces] - centre, axis=1))]  # a point on the crease itself
         p = int(ids[k])
@@ -104,10 +108,27 @@ def creases_not_folding(mesh: FoldMesh, fold_angles: np.ndarray, percent: float)
                 "angle_deg": float(mean_angle[k]),
                 "target_deg": float(mean_target[k]),
                 "at_mm": [float(at[0]), float(at[1])],
+                "smallest_corner_deg": corner,
             }
         )
     out.sort(key=lambda c: -(c["flat_mm"] + c["wrong_way_mm"]))
     return out
+
+
+def _smallest_corner_beside(mesh: FoldMesh, edges: np.ndarray) -> np.ndarray:
+    """Per mesh edge in ``edges``, the smallest flat corner (degrees) of the triangles on either side of it."""
+    tri = np.asarray(mesh.triangles, dtype=np.int64)
+    if len(tri) == 0:
+        return np.full(len(edges), np.inf)
+    n = max(mesh.n_vertices, 1)
+    sides = np.sort(np.stack([tri, np.roll(tri, -1, axis=1)], axis=-1).reshape(-1, 2), axis=1)
+    keys, at = np.unique(sides[:, 0] * n + sides[:, 1], return_inverse=True)
+    per_key = np.full(len(keys), np.inf)
+    np.minimum.at(per_key, at.reshape(-1), np.repeat(corner_angles(mesh.vertices, tri).min(axis=1), 3))
+    pair = np.sort(mesh.edges[edges], axis=1)
+    key = pair[:, 0] * n + pair[:, 1]
+    where = np.clip(np.searchsorted(keys, key), 0, len(keys) - 1)
+    return np.where(keys[where] == key, per_key[where], np.inf)
 
 
 def isolated_creases(mesh: FoldMesh) -> list[dict[str, Any]]:
@@ -167,9 +188,13 @@ def _describe(c: dict[str, Any]) -> str:
         how.append(f"{c['wrong_way_mm']:.1f} mm fold the wrong way")
     if c["flat_mm"] > 0:
         how.append(f"{c['flat_mm']:.1f} mm fold less than half")  # the paper's "stay flat", as measured
+    hint = ""
+    if c.get("smallest_corner_deg", math.inf) < SLIVER_DEG:  # no room to fold: a mesh matter, not the design's
+        corner = c["smallest_corner_deg"]
+        hint = f"; its triangles have corners down to {corner:.2f}° (a smaller interval may mesh it better)"
     return (
         f"{c['crease']}: of its {c['length_mm']:.1f} mm, {' and '.join(how)} (folded {c['angle_deg']:.0f}° for "
-        f"{c['target_deg']:.0f}°), around ({c['at_mm'][0]:.1f}, {c['at_mm'][1]:.1f}) mm"
+        f"{c['target_deg']:.0f}°), around ({c['at_mm'][0]:.1f}, {c['at_mm'][1]:.1f}) mm{hint}"
     )
 
 

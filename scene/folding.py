@@ -347,7 +347,7 @@ def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None, 
         yield from as_units(solver.prepare_steps(), jobs.Progress("model"))
     yield jobs.Progress("solve")
     result = yield from solve_progress(solver, percent, start=start)
-    yield jobs.Progress("figures")  # the self-intersection test and the report: units of their own (~65 ms each)
+    yield jobs.Progress("figures")  # the self-intersection test and the report: a unit each (~35 ms at 3,000 faces)
     crossing = None
     if np.all(np.isfinite(result.positions)):
         from ..core.metrics.intersections import intersecting_faces

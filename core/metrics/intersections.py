@@ -16,7 +16,7 @@ Two phases, both vectorised with numpy:
 Pairs that share a vertex are neighbours in the sheet (they meet along an edge or at a corner by construction) and
 are never reported. Contact is not penetration: triangles that only touch (a corner on a face, an edge on an edge)
 or lie in the same plane (stacked layers of a flat fold) are not counted; the tolerance is ``1e-6`` of the folded
-bounding-box diagonal.
+bounding-box diagonal (the box on the sheet's principal axes: the test turns the sheet onto them first).
 """
 
 from __future__ import annotations
@@ -197,6 +197,15 @@ def _crossing(x: np.ndarray, tri_a: np.ndarray, tri_b: np.ndarray, na: np.ndarra
     return good & (np.minimum(a1, b1) - np.maximum(a0, b0) > tol)
 
 
+def _principal_frame(x: np.ndarray) -> np.ndarray:
+    """``x`` centred and turned onto its principal axes (a rigid motion: crossings do not change). The grid's boxes
+    are axis-aligned, so a sheet tilted in space gave loose boxes and more candidate pairs: a coiled circular pleat
+    standing on edge took 143 ms against 42 ms lying flat."""
+    x = x - x.mean(axis=0)
+    _, axes = np.linalg.eigh(x.T @ x)
+    return x @ axes
+
+
 def intersecting_pairs(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Pairs ``(k, 2)`` (``i < j``) of triangles that pass through each other, neighbours (a shared vertex) excluded.
 
@@ -205,9 +214,10 @@ def intersecting_pairs(positions: np.ndarray, triangles: np.ndarray) -> np.ndarr
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     if len(tris) < 2:
         return np.zeros((0, 2), dtype=np.int64)
-    corners = x[tris]
-    if not np.all(np.isfinite(corners)):
+    if not np.all(np.isfinite(x[tris])):
         raise ValueError("positions must be finite to test for self-intersection")
+    x = _principal_frame(x)
+    corners = x[tris]
     diagonal = float(np.linalg.norm(corners.max(axis=(0, 1)) - corners.min(axis=(0, 1))))
     tol = REL_TOLERANCE * diagonal
     normals, flat = _unit_normals(corners)

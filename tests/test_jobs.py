@@ -353,3 +353,37 @@ def test_modal_loop_runs_slices_and_esc_cancels(folded, extension, monkeypatch):
         ticks += 1
     assert state == {"FINISHED"} and ticks >= 1 and reports[-1][0] == "DONE"
     assert reports[-1][1].report["percent"] == pytest.approx(0.4)
+
+
+def test_a_slice_stops_before_a_unit_of_a_longer_kind():
+    """A slice runs units while the next one fits the budget, predicted as the longest unit of its kind seen so far
+    (the first of a kind: as long as the last unit). A bake alternates cheap warm iterations with long ones (a frame
+    after a grid point), and predicting the next unit from the last let slices reach 110 ms of an 80 ms budget: here
+    five short units ("a", 2 ms) then a long one ("b", 40 ms) with a 30 ms budget, where the old rule ran a slice of
+    five a's and a b (50 ms)."""
+    import time
+
+    from curved_fold.scene import jobs
+
+    current = [0]  # the slice running
+    ran: list[tuple[int, str]] = []  # (slice, kind) of every unit
+
+    def steps():
+        for _ in range(4):  # a progress names the unit that follows it
+            for i in range(5):
+                ran.append((current[0], "a"))
+                time.sleep(0.002)
+                yield jobs.Progress("a" if i < 4 else "b")
+            ran.append((current[0], "b"))
+            time.sleep(0.040)
+            yield jobs.Progress("a")
+        return "done"
+
+    job = jobs.start(jobs.Job("slicing-test", "test", steps()))
+    while not jobs.run_slice(job, budget_ms=30.0):
+        current[0] += 1
+    assert job.result == "done"
+    first_b = next(k for k, kind in ran if kind == "b")
+    for k in range(first_b + 1, current[0] + 1):
+        kinds = [kind for j, kind in ran if j == k]
+        assert not ("a" in kinds and "b" in kinds[kinds.index("a") :]), (k, kinds)

@@ -16,6 +16,7 @@ from curved_fold.core.io.fold import (
     fold_to_mesh,
     fold_to_pattern,
     parse_fold,
+    pattern_for_folding,
     read_fold,
     write_folded_fold,
 )
@@ -242,3 +243,23 @@ def test_another_tools_long_border_edges_are_split_as_a_drawings(tmp_path: Path)
     # here: mean fold-angle error 13° against 44°, strain at most 1.4 % against 3.7 %
     assert split["converged"] and split["fold_angle_error_mean_deg"] < 0.5 * whole["fold_angle_error_mean_deg"]
     assert split["strain_max_pct"] < whole["strain_max_pct"]
+
+
+def test_an_exports_sliver_triangulation_is_left_out_and_the_sheet_meshed_along_its_rulings() -> None:
+    """Origami Simulator saves its triangulation of the faces as facet (F) edges; between long curved polylines
+    its earcut triangles have corners far under 1°. ``tests/data/os_export_sliver_facets.fold`` is a helper
+    session's imitation of such an export (sine pleats, coordinates (x, 0, y) as its saveFOLD writes them): folded
+    on those facets it did not converge (500 iterations, residual 1.5e4, "does not fold as assigned"). When the
+    faces are all triangles and one with such a corner lies beside a facet, the facets are left out (a warning
+    says so) and the sheet is meshed along its rulings, as the drawing would be; facets of a file without such
+    faces are the designer's and stay."""
+    text = (Path(__file__).parent / "data" / "os_export_sliver_facets.fold").read_text()
+    exported = pattern_for_folding(parse_fold(text, "export.fold"))
+    assert not np.any(exported.assignments == "F")
+    assert any("190 facet (F) edge(s) triangulate the faces with corners under 1°" in w for w in exported.warnings)
+    run = fold_pattern(exported)
+    assert run.report["converged"] and run.report["iterations"] <= 40, run.report["message"]
+    plain = json.loads(text)
+    del plain["faces_vertices"]
+    drawn = pattern_for_folding(parse_fold(json.dumps(plain), "drawn.fold"))
+    assert np.count_nonzero(drawn.assignments == "F") == plain["edges_assignment"].count("F") == 190

@@ -21,7 +21,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -446,11 +446,48 @@ def pattern_for_folding(doc: FoldDocument) -> CreasePattern:
     import): :func:`fold_to_pattern` and, for another tool's file (no ``curved_fold:`` fields; ours keep the
     pieces they were discretised with), its straight border split into pieces as a drawing's is
     (:func:`..pattern.discretize.subdivide_straight_border`)."""
-    pattern = fold_to_pattern(doc)
-    if PREFIX + "edge_polyline" not in doc.data:
-        pattern = subdivide_straight_border(pattern)
-        pattern.validate()
+    if PREFIX + "edge_polyline" in doc.data:
+        return fold_to_pattern(doc)
+    doc = _without_sliver_facets(doc)
+    pattern = subdivide_straight_border(fold_to_pattern(doc))
+    pattern.validate()
     return pattern
+
+
+SLIVER_FACET_DEG = 1.0
+"""A file whose faces are all triangles, with a corner under this (degrees) beside a facet (F) edge, is taken as an
+export's triangulation: its facet edges are dropped."""
+
+
+def _without_sliver_facets(doc: FoldDocument) -> FoldDocument:
+    """``doc`` without its flat facet edges (F, angle 0) when they triangulate its faces badly: every face a
+    triangle, and one with a corner under :data:`SLIVER_FACET_DEG` beside a facet edge. That is an export's
+    triangulation, not a design: Origami Simulator saves its earcut triangles of the faces between long curved
+    polylines as F edges (corners down to 0.002°), which no solver folds (500 iterations, residual 2e5; dropping
+    only the edges beside the slivers left the rest of the earcut fan, still 500 iterations). The sheet is then
+    meshed along its rulings, as a drawing is, and a warning says so. Facets of polygon faces, or of a
+    triangulation without slivers, are kept: they are the designer's."""
+    facet = (doc.assignments == "F") & ~(np.abs(np.nan_to_num(doc.fold_angles)) > 0)
+    if not doc.faces or any(len(f) != 3 for f in doc.faces) or not facet.any() or doc.vertices is None:
+        return doc
+    tri = np.asarray(doc.faces, dtype=np.int64)
+    p = np.asarray(doc.vertices, dtype=np.float64)[tri][..., :2]
+    u, w = np.roll(p, -1, axis=1) - p, np.roll(p, 1, axis=1) - p
+    corner = np.degrees(np.abs(np.arctan2(u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0], np.sum(u * w, axis=2))))
+    thin = tri[corner.min(axis=1) < SLIVER_FACET_DEG]
+    n = max(len(doc.vertices), 1)
+    sides = np.sort(np.stack([thin, np.roll(thin, -1, axis=1)], axis=-1).reshape(-1, 2), axis=1)
+    pairs = np.sort(doc.edges, axis=1)
+    if not np.isin(pairs[facet, 0] * n + pairs[facet, 1], sides[:, 0] * n + sides[:, 1]).any():
+        return doc
+    assignments = doc.assignments.copy()
+    assignments[facet] = "J"  # left out of the pattern as join edges are
+    said = (
+        f"{doc.source_name}: its {int(facet.sum())} facet (F) edge(s) triangulate the faces with corners under "
+        f"{SLIVER_FACET_DEG:g}° (an export's triangulation, as Origami Simulator saves it): they are left out and "
+        "the sheet is meshed along its rulings"
+    )
+    return replace(doc, assignments=assignments, warnings=[*doc.warnings, said])
 
 
 def fold_to_mesh(doc: FoldDocument, source: str | None = None) -> FoldMesh:

@@ -263,3 +263,29 @@ def test_an_exports_sliver_triangulation_is_left_out_and_the_sheet_meshed_along_
     del plain["faces_vertices"]
     drawn = pattern_for_folding(parse_fold(json.dumps(plain), "drawn.fold"))
     assert np.count_nonzero(drawn.assignments == "F") == plain["edges_assignment"].count("F") == 190
+
+
+def test_a_crease_pattern_without_fold_angles_folds_flat_foldable() -> None:
+    """A crease pattern from Rabbit Ear or ORIPA gives mountains and valleys without ``edges_foldAngle`` (the spec
+    makes it optional): they mean flat-foldable creases, −180° and 180°, as Origami Simulator's importer offers.
+    They stayed flat before, silently ("converged, 0 iterations"); a null in the array is read the same way. A
+    warning says so, and the fold percent scales them."""
+    doc = {
+        "vertices_coords": [[0, 0], [1, 0], [1, 1], [0, 1], [0.35, 0], [0.35, 1], [0.65, 0], [0.65, 1]],
+        "edges_vertices": [[0, 4], [4, 6], [6, 1], [1, 2], [2, 7], [7, 5], [5, 3], [3, 0], [4, 5], [6, 7]],
+        "edges_assignment": ["B"] * 8 + ["V", "m"],
+        "frame_unit": "cm",
+    }
+    pattern = pattern_for_folding(parse_fold(json.dumps(doc), "cp.fold"))
+    creases = np.isin(pattern.assignments, ("M", "V"))
+    assert sorted(pattern.fold_angles[creases].tolist()) == [-180.0, 180.0]
+    assert any(
+        "2 mountain/valley edge(s) without a fold angle (no edges_foldAngle in the file)" in w for w in pattern.warnings
+    )
+    run = fold_pattern(pattern, percent=0.5)
+    assert run.report["converged"] and run.report["iterations"] > 0
+    assert np.ptp(run.result.positions[:, 2]) > 1.0  # folded, not flat (mm: the sheet is 10 mm)
+    doc["edges_foldAngle"] = [0] * 8 + [None, -90]
+    nulls = pattern_for_folding(parse_fold(json.dumps(doc), "null.fold"))
+    assert sorted(nulls.fold_angles[np.isin(nulls.assignments, ("M", "V"))].tolist()) == [-90.0, 180.0]
+    assert any("1 mountain/valley edge(s) without a fold angle (null in edges_foldAngle)" in w for w in nulls.warnings)

@@ -289,3 +289,26 @@ def test_a_crease_pattern_without_fold_angles_folds_flat_foldable() -> None:
     nulls = pattern_for_folding(parse_fold(json.dumps(doc), "null.fold"))
     assert sorted(nulls.fold_angles[np.isin(nulls.assignments, ("M", "V"))].tolist()) == [-90.0, 180.0]
     assert any("1 mountain/valley edge(s) without a fold angle (null in edges_foldAngle)" in w for w in nulls.warnings)
+
+
+def test_a_folded_key_frame_reads_its_crease_pattern_from_a_flat_frame() -> None:
+    """A FOLD file may keep its folded state in the key frame and the crease pattern in a frame of its own
+    (``file_frames`` with ``frame_inherit``, 2D): the pattern is that frame's, the key frame is a folded frame. It
+    was refused ("… without a flat crease pattern …"), though the flat pattern was in the file."""
+    flat = [[0, 0], [10, 0], [10, 10], [0, 10], [5, 0], [5, 10]]
+    folded = [[0, 0, 0], [5, 0, 5], [5, 10, 5], [0, 10, 0], [5, 0, 0], [5, 10, 0]]  # the right half turned up 90°
+    doc = {
+        "frame_classes": ["foldedForm"],
+        "vertices_coords": folded,
+        "edges_vertices": [[0, 4], [4, 1], [1, 2], [2, 5], [5, 3], [3, 0], [4, 5]],
+        "edges_assignment": ["B", "B", "B", "B", "B", "B", "V"],
+        "edges_foldAngle": [0, 0, 0, 0, 0, 0, 90],
+        "file_frames": [
+            {"frame_classes": ["creasePattern"], "frame_inherit": True, "frame_parent": 0, "vertices_coords": flat}
+        ],
+    }
+    parsed = parse_fold(json.dumps(doc), "key3d.fold")
+    np.testing.assert_allclose(parsed.vertices, flat)
+    assert len(parsed.frames) == 1 and np.allclose(parsed.frames[0], folded)
+    pattern = pattern_for_folding(parsed)
+    assert np.count_nonzero(pattern.assignments == "V") == 1

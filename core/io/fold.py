@@ -219,6 +219,11 @@ def parse_fold(text: str, source_name: str = "<fold>") -> FoldDocument:
             raise _fail(src, f"{where}vertices_coords has {len(fc)} entries but vertices_coords has {n}")
         if fc.shape[1] == 2:
             fc = np.column_stack([fc, np.zeros(n)])
+        same_edges = "edges_vertices" not in fr or fr["edges_vertices"] == data["edges_vertices"]
+        plane = flat_plane(fc, float(np.max(np.ptp(fc, axis=0)))) if flat is None and same_edges else None
+        if plane is not None:  # a folded key frame with its crease pattern in a frame of its own
+            flat = plane
+            continue
         frames.append(fc)
         frame_angles.append(frame_angles_of(fr, where) if fa_key not in merged else frame_angles_of(merged, where))
     return FoldDocument(

@@ -239,3 +239,15 @@ def test_a_tolerance_below_the_round_off_floor_converges_to_round_off(monkeypatc
         assert rigid_rms(r.positions, reachable.positions) / mesh.diagonal < 1e-9
     monkeypatch.setattr(newton, "ROUNDOFF_FACTOR", 0.0)
     assert not Solver(mesh, SolverSettings(tolerance=0.0)).solve(0.8).converged
+
+
+def test_a_path_fold_message_counts_the_whole_path():
+    """The message of a fold along the natural path counts the path's iterations, as the report does (the last
+    stage's own count read "not converged … after 0 iterations (limit)" beside "500 iterations")."""
+    from tests.test_solver_fixtures import fixture_mesh
+
+    mesh = fixture_mesh("Treble_Clef.svg")
+    capped = Solver(mesh, SolverSettings(max_iterations=20)).solve(1.0)
+    assert capped.iterations == 20 and "after 20 iterations (0 in the last step) (limit)" in capped.message
+    done = Solver(mesh).solve(1.0)
+    assert f"after {done.iterations} iterations (" in done.message

@@ -433,7 +433,11 @@ class Solver:
             x, theta = model.from_mm(r.positions), r.theta
         with single_threaded_blas():
             negative = self.negative_pivots(x, theta, percent)
-        r.iterations = totals["iterations"]
+        last_step, r.iterations = r.iterations, totals["iterations"]
+        if last_step != r.iterations:  # the stage's message counted its own: say the whole path's, as the report does
+            r.message = r.message.replace(
+                f"after {last_step} iterations", f"after {r.iterations} iterations ({last_step} in the last step)", 1
+            )
         r.force_evaluations = totals["evaluations"]
         r.hessian_assemblies = totals["assemblies"] + 1
         r.linear_solves = totals["solves"]

@@ -331,3 +331,15 @@ def test_delaunay_flips_that_cycle_under_the_tolerance_are_redone_exactly(monkey
             continue
         val = tr._incircle_exact(fr[a], fr[b], fr[c], fr[d])
         assert val < 0 or (val == 0 and min(c, d) > min(a, b)), (a, b)
+
+
+def test_an_isolated_vertex_is_dropped_and_said_where() -> None:
+    """A FOLD file may list a vertex no edge uses: it is dropped with a warning that says where it is (it gave only
+    a count, and a file's vertex index no longer matches the pattern's after merges)."""
+    p = _pattern(
+        np.array([[0, 0], [10, 0], [10, 10], [0, 10], [4, 0], [4, 10], [7.5, 2.5]], float),
+        np.array([[0, 4], [4, 1], [1, 2], [2, 5], [5, 3], [3, 0], [4, 5]]),
+        "BBBBBBV",
+    )
+    pt = constrained_triangulation(p)
+    assert "triangulation: 1 isolated vertex(es) without segments dropped, at (7.500, 2.500) mm" in pt.warnings

@@ -462,7 +462,10 @@ def _pattern_segments(pattern: CreasePattern, warnings: list[str]) -> _Segments:
         )
     used = np.unique(edges)
     if len(used) < pattern.n_vertices:
-        warnings.append(f"triangulation: {pattern.n_vertices - len(used)} isolated vertex(es) without segments dropped")
+        lone = np.setdiff1d(np.arange(pattern.n_vertices), used)
+        at = ", ".join(f"({x:.3f}, {y:.3f})" for x, y in pattern.vertices[lone[:3]].tolist())
+        more = f" and {len(lone) - 3} more" if len(lone) > 3 else ""
+        warnings.append(f"triangulation: {len(lone)} isolated vertex(es) without segments dropped, at {at} mm{more}")
     remap = np.full(pattern.n_vertices, -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
     pts = pattern.vertices[used]

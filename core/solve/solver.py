@@ -32,7 +32,7 @@ from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
 from .model import BarHingeModel, build_model, with_glue
 from .newton import TAIL_RESIDUAL, Fixed, HessianAssembler, inertia_shift, newton_steps
-from .pose import on_table, resting_pieces
+from .pose import on_pins, on_table, resting_pieces
 
 METHODS = ("fast", "faithful", "isometric")
 
@@ -174,13 +174,14 @@ class Solver:
         self._resting: list[tuple[np.ndarray | None, np.ndarray]] | None = None
 
     def _placed(self, positions: np.ndarray) -> np.ndarray:
-        """``positions`` (mm) with the sheet's centre face on the table (:mod:`.pose`), unless pins hold the pose:
-        the placement of a fast solve's result is then a function of its shape alone, not of the path to it."""
-        if self.constraints is not None and len(self.constraints.pins):
-            return positions
+        """``positions`` (mm) with the sheet's centre face on the table (:mod:`.pose`), or, with pins, turned about
+        them as the face asks where they leave a turn free: the placement of a fast solve's result is then a
+        function of its shape (and pins) alone, not of the path to it."""
         if self._resting is None:
             glued = self.constraints is not None and len(self.constraints.glue) > 0
             self._resting = resting_pieces(self.mesh, together=glued)
+        if self.constraints is not None and len(self.constraints.pins):  # the pins place it; the face what they leave
+            return on_pins(positions, self.mesh.vertices_3d, self._resting, self.constraints.pins)
         return on_table(positions, self.mesh.vertices_3d, self._resting)
 
     def _placed_steps(self, steps: Generator[SolveProgress, None, FoldResult]):

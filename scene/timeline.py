@@ -29,8 +29,9 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from ..core import as_units
+from ..core.pattern.model import PatternError
 from ..core.solve.path import WARM_MAX_ITERATIONS
-from . import app_handlers, bake, folding, jobs, mesh_object
+from . import app_handlers, bake, folding, jobs, mesh_object, pins
 from .fold_settings import engine_id, settings_dict
 
 FRAME_MAX_ITERATIONS = 12
@@ -95,22 +96,40 @@ class FrameCache:
         self.mesh = mesh
         self.frames: dict[int, CachedFrame] = {}
         self._solvers: dict[str, object] = {}
+        self.held = None  # the object's pins and glue (core.solve.constraints.Constraints), set by cache_for
+        self._held_key = ""
+
+    def hold(self, held) -> None:
+        """Solve the frames with ``held`` (pins and glue, or None): frames solved without them, or with others, no
+        longer count as solved."""
+        self.held = held
+        if held is None:
+            self._held_key = ""
+        else:
+            digest = hashlib.sha1()
+            for part in (held.pins, held.pin_targets, held.glue):
+                digest.update(np.ascontiguousarray(part).tobytes())
+            self._held_key = " held " + digest.hexdigest()
+
+    def settings(self, props) -> str:
+        """What a frame depends on besides its percent: the solver settings and the pins and glue."""
+        return settings_key(props) + self._held_key
 
     def solver(self, props):
         """The quasi-static solver for ``props``' settings (kept: its Hessian ordering is paid once)."""
         from ..core.solve.solver import Solver
 
-        key = settings_key(props)
+        key = self.settings(props)
         if key not in self._solvers:
             method = "fast" if props.solver == "FAITHFUL" else engine_id(props.solver)
             settings = folding.solver_settings(props)  # frames are capped per solve (solve_steps)
-            self._solvers = {key: Solver(self.mesh, settings, method)}
+            self._solvers = {key: Solver(self.mesh, settings, method, self.held)}
         return self._solvers[key]
 
     def get(self, frame: int, percent: float, props) -> CachedFrame | None:
         """The cached frame if it was solved at this percent with these settings."""
         hit = self.frames.get(int(frame))
-        if hit is not None and hit.percent == float(percent) and hit.settings == settings_key(props):
+        if hit is not None and hit.percent == float(percent) and hit.settings == self.settings(props):
             return hit
         return None
 
@@ -130,7 +149,7 @@ class FrameCache:
 
         solver = self.solver(props)
         step = solver.settings.continuation_step
-        key = settings_key(props)
+        key = self.settings(props)
         usable = sorted(
             (e.percent, e)
             for e in self.frames.values()
@@ -167,7 +186,7 @@ class FrameCache:
         ``WARM_MAX_ITERATIONS``; a warm frame that does not converge in them is solved from the path. A new
         solver's model and Hessian structure are units of their own (~300 ms in one unit at 3,000 faces before: the
         longest slice of a bake)."""
-        new_solver = settings_key(props) not in self._solvers
+        new_solver = self.settings(props) not in self._solvers
         solver = self.solver(props)
         if new_solver:
             built = jobs.Progress(
@@ -196,7 +215,7 @@ class FrameCache:
             raise FloatingPointError(f"frame {frame}: the solver returned non-finite positions")
         iterations = r.iterations - r.reused_iterations  # this frame's, not those of the kept path states
         entry = CachedFrame(
-            float(percent), settings_key(props), r.positions, r.theta, iterations, r.converged, r.residual
+            float(percent), self.settings(props), r.positions, r.theta, iterations, r.converged, r.residual
         )
         self.frames[int(frame)] = entry
         return entry
@@ -213,6 +232,10 @@ def cache_for(ob: bpy.types.Object) -> FrameCache:
     if cache is None or cache.key != key:
         cache = FrameCache(key, mesh_object.read_fold_mesh(ob))
         _caches[ob.name] = cache
+    try:  # the frames fold with the object's pins and glue, as Fold and Re-fold do
+        cache.hold(pins.constraints_from_object(ob, cache.mesh))
+    except PatternError:  # mismatched glue groups: Re-fold names the problem; frames fold free meanwhile
+        cache.hold(None)
     return cache
 
 

@@ -250,9 +250,9 @@ def test_an_exports_sliver_triangulation_is_left_out_and_the_sheet_meshed_along_
     its earcut triangles have corners far under 1°. ``tests/data/os_export_sliver_facets.fold`` is a helper
     session's imitation of such an export (sine pleats, coordinates (x, 0, y) as its saveFOLD writes them): folded
     on those facets it did not converge (500 iterations, residual 1.5e4, "does not fold as assigned"). When the
-    faces are all triangles and one with such a corner lies beside a facet, the facets are left out (a warning
-    says so) and the sheet is meshed along its rulings, as the drawing would be; facets of a file without such
-    faces are the designer's and stay."""
+    faces are all triangles (or, without faces, the triangles the edges close) and one with such a corner lies
+    beside a facet, the facets are left out (a warning says so) and the sheet is meshed along its rulings, as the
+    drawing would be; a designer's facet line without slivers stays."""
     text = (Path(__file__).parent / "data" / "os_export_sliver_facets.fold").read_text()
     exported = pattern_for_folding(parse_fold(text, "export.fold"))
     assert not np.any(exported.assignments == "F")
@@ -260,9 +260,21 @@ def test_an_exports_sliver_triangulation_is_left_out_and_the_sheet_meshed_along_
     run = fold_pattern(exported)
     assert run.report["converged"] and run.report["iterations"] <= 40, run.report["message"]
     plain = json.loads(text)
-    del plain["faces_vertices"]
-    drawn = pattern_for_folding(parse_fold(json.dumps(plain), "drawn.fold"))
-    assert np.count_nonzero(drawn.assignments == "F") == plain["edges_assignment"].count("F") == 190
+    del plain["faces_vertices"]  # without faces, the triangles its edges close around the facets tell the same
+    bare = pattern_for_folding(parse_fold(json.dumps(plain), "bare.fold"))
+    assert not np.any(bare.assignments == "F")
+    designed = {  # a facet line the designer drew, with no sliver beside it: kept
+        "vertices_coords": [[0, 0], [5, 0], [10, 0], [10, 10], [5, 10], [0, 10]],
+        "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 4], [4, 5], [5, 0], [1, 4], [0, 4]],
+        "edges_assignment": ["B"] * 6 + ["V", "F"],
+        "edges_foldAngle": [0] * 6 + [90, 0],
+        "faces_vertices": [[0, 1, 4], [1, 2, 3, 4], [0, 4, 5]],
+    }
+    kept = pattern_for_folding(parse_fold(json.dumps(designed), "designed.fold"))
+    assert np.count_nonzero(kept.assignments == "F") == 1 and not kept.warnings
+    del designed["faces_vertices"]
+    kept = pattern_for_folding(parse_fold(json.dumps(designed), "designed.fold"))
+    assert np.count_nonzero(kept.assignments == "F") == 1 and not kept.warnings
 
 
 def test_a_crease_pattern_without_fold_angles_folds_flat_foldable() -> None:

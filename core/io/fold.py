@@ -483,18 +483,32 @@ SLIVER_FACET_DEG = 1.0
 export's triangulation: its facet edges are dropped."""
 
 
+def _triangles_at(edges: np.ndarray, which: np.ndarray) -> np.ndarray:
+    """The triangles ``(k, 3)`` that the edges close around the edges ``which`` (3-cycles of the edge graph
+    through one of them): a file's triangulation when it gives no faces."""
+    around: dict[int, set[int]] = {}
+    for i, j in edges.tolist():
+        around.setdefault(i, set()).add(j)
+        around.setdefault(j, set()).add(i)
+    found = {tuple(sorted((i, j, k))) for i, j in edges[which].tolist() for k in around[i] & around[j]}
+    return np.array(sorted(found), dtype=np.int64).reshape(-1, 3)
+
+
 def _without_sliver_facets(doc: FoldDocument) -> FoldDocument:
     """``doc`` without its flat facet edges (F, angle 0) when they triangulate its faces badly: every face a
     triangle, and one with a corner under :data:`SLIVER_FACET_DEG` beside a facet edge. That is an export's
     triangulation, not a design: Origami Simulator saves its earcut triangles of the faces between long curved
     polylines as F edges (corners down to 0.002°), which no solver folds (500 iterations, residual 2e5; dropping
     only the edges beside the slivers left the rest of the earcut fan, still 500 iterations). The sheet is then
-    meshed along its rulings, as a drawing is, and a warning says so. Facets of polygon faces, or of a
-    triangulation without slivers, are kept: they are the designer's."""
+    meshed along its rulings, as a drawing is, and a warning says so. A file without faces is judged by the
+    triangles its edges close around its facets (such an export without ``faces_vertices`` stalled the same way).
+    Facets of polygon faces, or of a triangulation without slivers, are kept: they are the designer's."""
     facet = (doc.assignments == "F") & ~(np.abs(np.nan_to_num(doc.fold_angles)) > 0)
-    if not doc.faces or any(len(f) != 3 for f in doc.faces) or not facet.any() or doc.vertices is None:
+    if any(len(f) != 3 for f in doc.faces) or not facet.any() or doc.vertices is None:
         return doc
-    tri = np.asarray(doc.faces, dtype=np.int64)
+    tri = np.asarray(doc.faces, dtype=np.int64).reshape(-1, 3) if doc.faces else _triangles_at(doc.edges, facet)
+    if not len(tri):
+        return doc
     p = np.asarray(doc.vertices, dtype=np.float64)[tri][..., :2]
     u, w = np.roll(p, -1, axis=1) - p, np.roll(p, 1, axis=1) - p
     corner = np.degrees(np.abs(np.arctan2(u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0], np.sum(u * w, axis=2))))

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..mesh.fold_mesh import FoldMesh
+from ..mesh.fold_mesh import FoldMesh, corner_angles, polygon_sides
 from ..pattern.discretize import subdivide_straight_border
 from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
 from .atomic import atomic_write_text
@@ -294,7 +294,7 @@ def cut_mask(
     if faces is not None and len(faces):
         if isinstance(faces, np.ndarray) or len({len(f) for f in faces}) == 1:  # triangles: one array, no loop
             rect = np.asarray(faces, dtype=np.int64)
-            sides = [np.sort(np.stack([rect, np.roll(rect, -1, axis=1)], axis=-1).reshape(-1, 2), axis=1)]
+            sides = [polygon_sides(rect)]
         else:
             sides = [
                 np.sort(np.column_stack([f, np.roll(f, -1)]), axis=1) for f in map(np.asarray, faces) if len(f) > 1
@@ -509,12 +509,9 @@ def _without_sliver_facets(doc: FoldDocument) -> FoldDocument:
     tri = np.asarray(doc.faces, dtype=np.int64).reshape(-1, 3) if doc.faces else _triangles_at(doc.edges, facet)
     if not len(tri):
         return doc
-    p = np.asarray(doc.vertices, dtype=np.float64)[tri][..., :2]
-    u, w = np.roll(p, -1, axis=1) - p, np.roll(p, 1, axis=1) - p
-    corner = np.degrees(np.abs(np.arctan2(u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0], np.sum(u * w, axis=2))))
-    thin = tri[corner.min(axis=1) < SLIVER_FACET_DEG]
+    thin = tri[corner_angles(np.asarray(doc.vertices)[:, :2], tri).min(axis=1) < SLIVER_FACET_DEG]
     n = max(len(doc.vertices), 1)
-    sides = np.sort(np.stack([thin, np.roll(thin, -1, axis=1)], axis=-1).reshape(-1, 2), axis=1)
+    sides = polygon_sides(thin)
     pairs = np.sort(doc.edges, axis=1)
     if not np.isin(pairs[facet, 0] * n + pairs[facet, 1], sides[:, 0] * n + sides[:, 1]).any():
         return doc

@@ -88,3 +88,25 @@ class FoldMesh:
         """Twice the signed flat area of each triangle (> 0 for counter-clockwise)."""
         a, b, c = (self.vertices[self.triangles[:, k]] for k in range(3))
         return (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+
+
+def corner_angles(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Corner angles ``(t, 3)`` in degrees of triangles on 2D or 3D ``vertices``; column k is the corner at
+    ``triangles[:, k]`` (``atan2(|u × w|, u · w)``: accurate near 0° and 180°)."""
+    p = np.asarray(vertices, dtype=float)
+    if p.shape[1] == 2:
+        p = np.column_stack([p, np.zeros(len(p))])
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    out = np.empty((len(t), 3))
+    for k in range(3):
+        a, b, c = p[t[:, k]], p[t[:, (k + 1) % 3]], p[t[:, (k + 2) % 3]]
+        u, w = b - a, c - a
+        out[:, k] = np.degrees(np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w)))
+    return out
+
+
+def polygon_sides(polygons: np.ndarray) -> np.ndarray:
+    """The sides ``(k·m, 2)`` of ``k`` polygons given as rows of ``m`` vertex indices, each as a sorted vertex pair
+    (row ``i·m + j`` is the side from corner ``j`` of polygon ``i`` to the next)."""
+    rows = np.asarray(polygons, dtype=np.int64)
+    return np.sort(np.stack([rows, np.roll(rows, -1, axis=1)], axis=-1).reshape(-1, 2), axis=1)

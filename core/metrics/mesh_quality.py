@@ -18,27 +18,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..mesh.fold_mesh import FoldMesh
+from ..mesh.fold_mesh import FoldMesh, corner_angles
 from ..mesh.triangulate import constrained_triangulation
 from ..pattern.model import CreasePattern
 
 SLIVER_DEG = 1.0
 """Corners under this many degrees are counted as slivers (the issue's count: 110 such corners stalled a solve)."""
-
-
-def corner_angles(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Corner angles ``(t, 3)`` in degrees of triangles on 2D or 3D ``vertices``; column k is the corner at
-    ``triangles[:, k]`` (``atan2(|u × w|, u · w)``: accurate near 0° and 180°)."""
-    p = np.asarray(vertices, dtype=float)
-    if p.shape[1] == 2:
-        p = np.column_stack([p, np.zeros(len(p))])
-    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
-    out = np.empty((len(t), 3))
-    for k in range(3):
-        a, b, c = p[t[:, k]], p[t[:, (k + 1) % 3]], p[t[:, (k + 2) % 3]]
-        u, w = b - a, c - a
-        out[:, k] = np.degrees(np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w)))
-    return out
 
 
 def forced_smallest_corner(pattern: CreasePattern, backend: str = "auto") -> float:

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ..mesh.fold_mesh import FoldMesh
+from ..mesh.fold_mesh import FoldMesh, polygon_sides
 from .mesh_quality import SLIVER_DEG, corner_angles
 
 FOLDED_FRACTION = 0.5
@@ -138,7 +138,7 @@ def _smallest_corner_beside(mesh: FoldMesh, edges: np.ndarray) -> np.ndarray:
     if len(tri) == 0:
         return np.full(len(edges), np.inf)
     n = max(mesh.n_vertices, 1)
-    sides = np.sort(np.stack([tri, np.roll(tri, -1, axis=1)], axis=-1).reshape(-1, 2), axis=1)
+    sides = polygon_sides(tri)
     keys, at = np.unique(sides[:, 0] * n + sides[:, 1], return_inverse=True)
     per_key = np.full(len(keys), np.inf)
     np.minimum.at(per_key, at.reshape(-1), np.repeat(corner_angles(mesh.vertices, tri).min(axis=1), 3))

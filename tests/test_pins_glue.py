@@ -191,8 +191,8 @@ def test_a_sheet_on_one_or_two_pins_does_not_creep_over_re_folds(single_curve_me
     """One pin leaves the sheet free to turn about it, two about their line; a warm re-fold (as Live and Re-fold
     do from the shape shown) left that turn where its damped steps took it, so going 100 → 40 → 100 % again and
     again crept the sheet about the pins (1.07 mm more per cycle on one pin, 8.1 mm on two, in a helper's UI
-    session). The free turn is now chosen by the sheet's centre face (``core.solve.pose.on_pins``): every cycle
-    comes back to the same place, the pins exact."""
+    session). The free turn is now chosen by the sheet's centre face (``core.solve.pose.on_table`` with the pins):
+    every cycle comes back to the same place, the pins exact."""
     mesh = single_curve_mesh
     far = int(np.argmax(np.linalg.norm(mesh.vertices - mesh.vertices[mesh.triangles[0][0]], axis=1)))
     pins = np.array([mesh.triangles[0][0], far][:n_pins])

@@ -13,7 +13,7 @@ rigidly so that this triangle lies where it was drawn, as well as its strain all
 three corners). The placement is then a function of the shape alone: the same for a static fold, an animation frame
 and a live re-fold, on every front door. A single triangle is always well conditioned, where a best fit of the whole
 folded sheet to the flat one is not (a sheet folded in half has no preferred turn about its crease). Pins decide the
-pose themselves; where one pin, or two in a line, leave a turn free, the face chooses it (:func:`on_pins`). A sheet
+pose themselves; where one pin, or two in a line, leave a turn free, the face chooses it (:func:`on_table`). A sheet
 in several pieces (a hole drawn as a closed cut leaves a loose disc) places each piece on its own centre face,
 unless glue joins them (then the whole sheet moves as one).
 """
@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from ..mesh.fold_mesh import FoldMesh
+from ..mesh.fold_mesh import FoldMesh, corner_angles
 from ..mesh.triangulate import connected_components
 from .constraints import rigid_fit
 
@@ -59,11 +59,8 @@ def _centre_triangles(mesh: FoldMesh, group: np.ndarray) -> list[np.ndarray]:
     """For each group of triangles (``group[t]`` = 0, 1, …), its well-shaped triangle nearest its area centroid."""
     tri = np.asarray(mesh.triangles, dtype=np.int64)
     p = np.asarray(mesh.vertices_3d, dtype=np.float64)[tri]  # (t, 3 corners, 3)
-    edges = np.roll(p, -1, axis=1) - p  # corner k to k + 1
-    a, b = -np.roll(edges, 1, axis=1), edges  # the two sides leaving each corner
-    cos = np.sum(a * b, axis=2) / np.maximum(np.linalg.norm(a, axis=2) * np.linalg.norm(b, axis=2), 1e-300)
-    smallest = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).min(axis=1)
-    area = 0.5 * np.linalg.norm(np.cross(edges[:, 0], -edges[:, 2]), axis=1)
+    smallest = corner_angles(mesh.vertices, tri).min(axis=1)
+    area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
     middle = p.mean(axis=1)
     size = float(np.ptp(p.reshape(-1, 3), axis=0).max())
     out = []
@@ -79,35 +76,26 @@ def _centre_triangles(mesh: FoldMesh, group: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def on_table(positions: np.ndarray, flat: np.ndarray, pieces: list[tuple[np.ndarray | None, np.ndarray]]) -> np.ndarray:
-    """``positions`` ``(n, 3)`` mm with each piece (:func:`resting_pieces`) moved rigidly so that its triangle's
-    corners come closest to where they are in ``flat`` (least squares; exactly there when unstrained)."""
-    p = np.asarray(positions, dtype=np.float64)
-    flat = np.asarray(flat, dtype=np.float64)
-    out = p.copy() if len(pieces) > 1 else p
-    for vertices, triangle in pieces:
-        rot, shift = rigid_fit(p[triangle], flat[triangle])
-        if vertices is None:
-            out = p @ rot + shift
-        else:
-            out[vertices] = p[vertices] @ rot + shift
-    return out
-
-
-def on_pins(
-    positions: np.ndarray, flat: np.ndarray, pieces: list[tuple[np.ndarray | None, np.ndarray]], pins: np.ndarray
+def on_table(
+    positions: np.ndarray,
+    flat: np.ndarray,
+    pieces: list[tuple[np.ndarray | None, np.ndarray]],
+    pins: np.ndarray | None = None,
 ) -> np.ndarray:
-    """``positions`` (a solve's result, its pinned vertices where the pins hold them) with what the pins leave free
-    chosen by each piece's centre face, as :func:`on_table` does without pins: a piece held by one pin is turned
-    about it, by two (or more in a line) about their line, so that its face comes closest to where it was drawn; a
-    piece held by three pins or more not in a line is left as it is, and one without pins is placed by its face.
-    Without this a sheet on one or two pins crept about them at every warm re-fold (1.07 mm more per 100 → 40 →
-    100 % cycle on one pin, 8.1 mm on two), since a damped solve leaves a free turn where its path took it."""
+    """``positions`` ``(n, 3)`` mm with each piece (:func:`resting_pieces`) moved rigidly so that its triangle's
+    corners come closest to where they are in ``flat`` (least squares; exactly there when unstrained). With
+    ``pins`` (vertex indices; the result of a solve holds them where they are) a piece keeps its pins and only what
+    they leave free is chosen by its face: a piece held by one pin is turned about it, by two (or more in a line)
+    about their line, so that its face comes closest to where it was drawn; one held by three pins or more not in a
+    line is left as it is. (A damped solve leaves the free turn where its path took it: a sheet on one or two pins
+    crept about them at every warm re-fold, 1.07 mm more per 100 → 40 → 100 % cycle on one pin, 8.1 mm on two.)"""
     p = np.array(positions, dtype=np.float64)
     flat = np.asarray(flat, dtype=np.float64)
+    pins = np.zeros(0, dtype=np.int64) if pins is None else np.asarray(pins, dtype=np.int64)
     for vertices, triangle in pieces:
-        members = np.arange(len(p)) if vertices is None else vertices
-        held = np.unique(p[np.intersect1d(pins, members)], axis=0)
+        members = slice(None) if vertices is None else vertices
+        at = pins if vertices is None else np.intersect1d(pins, vertices)  # the piece's pins
+        held = np.unique(p[at], axis=0)
         if len(held) == 0:
             rot, shift = rigid_fit(p[triangle], flat[triangle])
             p[members] = p[members] @ rot + shift
@@ -128,7 +116,6 @@ def on_pins(
             cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
             turn = np.eye(3) + math.sin(phi) * cross + (1.0 - math.cos(phi)) * cross @ cross  # Rodrigues, columns
             rot = turn.T  # rows: v @ rot = turn v
-        at = np.intersect1d(pins, members)
         kept = p[at]
         p[members] = (p[members] - centre) @ rot + centre
         p[at] = kept  # on the axis of the turn: where they were, not moved by its round-off

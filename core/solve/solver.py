@@ -32,7 +32,7 @@ from .forces import characteristic_force, evaluate
 from .linalg import single_threaded_blas
 from .model import BarHingeModel, build_model, with_glue
 from .newton import TAIL_RESIDUAL, Fixed, HessianAssembler, inertia_shift, newton_steps
-from .pose import on_pins, on_table, resting_pieces
+from .pose import on_table, resting_pieces
 
 METHODS = ("fast", "faithful", "isometric")
 
@@ -180,9 +180,8 @@ class Solver:
         if self._resting is None:
             glued = self.constraints is not None and len(self.constraints.glue) > 0
             self._resting = resting_pieces(self.mesh, together=glued)
-        if self.constraints is not None and len(self.constraints.pins):  # the pins place it; the face what they leave
-            return on_pins(positions, self.mesh.vertices_3d, self._resting, self.constraints.pins)
-        return on_table(positions, self.mesh.vertices_3d, self._resting)
+        pins = None if self.constraints is None else self.constraints.pins  # they place it; the face what they leave
+        return on_table(positions, self.mesh.vertices_3d, self._resting, pins)
 
     def _placed_steps(self, steps: Generator[SolveProgress, None, FoldResult]):
         """``steps`` with every position shown and the result :meth:`_placed` (a live display does not jump)."""
@@ -256,47 +255,43 @@ class Solver:
         sheet by continuation in the fold percent (:meth:`fold_steps`) unless ``continuation`` is False; given a
         ``start``, they solve once from it (``continuation=True`` is then refused).
         """
+        if self.method != "faithful":
+            return run_to_end(self.solve_steps(percent, start=start, theta_prev=theta_prev, continuation=continuation))
         s = self.settings
         model = self.model
         t0 = time.perf_counter()
         x0, theta_prev = self._start(start, theta_prev, percent)
-        if self.method == "faithful":
-            v0 = np.zeros_like(x0) if velocities is None else np.asarray(velocities, dtype=np.float64)
-            x, v, theta, st = faithful_solve(
-                model,
-                x0,
-                v0,
-                theta_prev,
-                percent,
-                dt=self.dt,
-                force_scale=self.force_scale,
-                tolerance=s.tolerance,
-                max_steps=s.max_steps if max_steps is None else max_steps,
-                check_every=s.check_every,
-                time_limit=s.time_limit,
-                stop_on_convergence=stop_on_convergence,
-            )
-            energy = evaluate(model, x, theta, percent, forces=False).energy
-            ms = (time.perf_counter() - t0) * 1000.0
-            return FoldResult(
-                positions=model.to_mm(x),
-                fold_angles=self.edge_angles(theta),
-                iterations=st.steps,
-                force_evaluations=st.force_evaluations + 1,
-                converged=st.converged,
-                residual=st.residual,
-                energy=energy,
-                simulation_ms=ms,
-                message=st.message,
-                method=self.method,
-                theta=theta,
-                velocities=v,
-                dt=self.dt,
-            )
-        if self._continues(start, continuation):
-            return run_to_end(self.fold_steps(percent))
-        return run_to_end(
-            self._placed_steps(self._fast_steps(x0, theta_prev, percent, t0, check_minimum=start is None))
+        v0 = np.zeros_like(x0) if velocities is None else np.asarray(velocities, dtype=np.float64)
+        x, v, theta, st = faithful_solve(
+            model,
+            x0,
+            v0,
+            theta_prev,
+            percent,
+            dt=self.dt,
+            force_scale=self.force_scale,
+            tolerance=s.tolerance,
+            max_steps=s.max_steps if max_steps is None else max_steps,
+            check_every=s.check_every,
+            time_limit=s.time_limit,
+            stop_on_convergence=stop_on_convergence,
+        )
+        energy = evaluate(model, x, theta, percent, forces=False).energy
+        ms = (time.perf_counter() - t0) * 1000.0
+        return FoldResult(
+            positions=model.to_mm(x),
+            fold_angles=self.edge_angles(theta),
+            iterations=st.steps,
+            force_evaluations=st.force_evaluations + 1,
+            converged=st.converged,
+            residual=st.residual,
+            energy=energy,
+            simulation_ms=ms,
+            message=st.message,
+            method=self.method,
+            theta=theta,
+            velocities=v,
+            dt=self.dt,
         )
 
     def _continues(self, start: np.ndarray | None, continuation: bool | None) -> bool:

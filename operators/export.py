@@ -121,14 +121,24 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
             elif suffix == ".fold":
                 from ..core.metrics import measures as metrics
 
-                kwargs = {"fold_angles": [metrics.fold_angles(mesh, p) for p in positions]}
+                # the solver's unwrapped angles of the last fold start an unbaked frame (a valley past flat is
+                # 199°, not −161°); baked frames are followed from the flat sheet
+                start = None if frames else mesh_object.simulated_fold_angles(ob)
+                kwargs = {"fold_angles": metrics.unwrapped_fold_angles(mesh, positions, start)}
             else:
                 kwargs["frame_numbers"] = frames or None
             path = export.export_folded_file(self.filepath, mesh, positions, **kwargs)
         except (*folding.engine_errors(), OSError, ImportError) as exc:
             self.report({"ERROR"}, f"Export of '{ob.name}' failed: {exc}")
             return {"CANCELLED"}
-        self.report({"INFO"}, f"Exported '{ob.name}' ({len(positions)} frame(s)) to {path}")
+        if frames and bake.is_stale(ob):  # the viewport shows a newer fold than the frames written
+            self.report(
+                {"WARNING"},
+                f"Exported '{ob.name}' ({len(positions)} baked frame(s)) to {path}, but the bake is out of date: "
+                "the fold changed since it was baked; bake again to export what the viewport shows",
+            )
+        else:
+            self.report({"INFO"}, f"Exported '{ob.name}' ({len(positions)} frame(s)) to {path}")
         return {"FINISHED"}
 
 

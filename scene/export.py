@@ -110,8 +110,11 @@ def _paper_surface(ob: bpy.types.Object, mesh: FoldMesh) -> None:
     me.materials.append(mat)
 
 
-def _copy_modifiers(source: bpy.types.Object, target: bpy.types.Object) -> None:
-    """Copy ``source``'s enabled modifiers (Solidify for thickness, ...) with their settings onto ``target``."""
+def _copy_modifiers(source: bpy.types.Object, target: bpy.types.Object, length_factor: float = 1.0) -> None:
+    """Copy ``source``'s enabled modifiers (Solidify for thickness, ...) with their settings onto ``target``;
+    lengths (properties with unit LENGTH: a thickness, an offset) times ``length_factor``, the ratio of the source
+    scene's Blender unit to the export scene's. The export scene has unit scale 1 (metres): a Solidify of 0.5 in a
+    scene of 1 unit = 1 mm was copied as 0.5 m, and the exported model came out ~1000× too thick."""
     for mod in source.modifiers:
         if not (mod.show_viewport or mod.show_render):
             continue
@@ -121,7 +124,10 @@ def _copy_modifiers(source: bpy.types.Object, target: bpy.types.Object) -> None:
             if prop.is_readonly or key in ("name", "type", "rna_type"):
                 continue
             with contextlib.suppress(AttributeError, TypeError, ValueError):
-                setattr(new, key, getattr(mod, key))
+                value = getattr(mod, key)
+                if prop.type == "FLOAT" and getattr(prop, "unit", "NONE") == "LENGTH" and length_factor != 1.0:
+                    value = value * length_factor if prop.array_length == 0 else [v * length_factor for v in value]
+                setattr(new, key, value)
         if mod.type == "NODES":  # Geometry Nodes inputs live in ID properties
             for key in mod.keys():
                 with contextlib.suppress(AttributeError, TypeError, ValueError, KeyError):
@@ -223,11 +229,15 @@ def export_folded_file(
         ob = mesh_object.create_fold_object(mesh, base, name, scene.collection, scene=scene, creases=False)
         _paper_surface(ob, mesh)
         if modifiers_from is not None:
-            _copy_modifiers(modifiers_from, ob)
+            user_scene = next(iter(modifiers_from.users_scene), None)
+            factor = 1.0 if user_scene is None else mesh_object.mm_per_unit(user_scene) / mesh_object.mm_per_unit(scene)
+            _copy_modifiers(modifiers_from, ob, factor)
         if animated and len(ob.modifiers):
             ob = _bake_evaluated(ob, mesh, scene, numbers, arr)
         elif animated:
             bake.bake_shape_keys(ob, numbers, list(arr), scene=scene)
+        if modifiers_from is not None:  # turned and scaled as in the user's scene (not moved: placed at the origin)
+            ob.matrix_world = modifiers_from.matrix_world.to_3x3().to_4x4()
         if animated:
             scene.frame_set(numbers[0])
         with _exported_as(ob, name), atomic_output(path) as tmp:
@@ -338,7 +348,11 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
             export_materials="EXPORT",
         )
     else:  # .blend
-        bpy.data.libraries.write(str(path), {ob}, fake_user=True)
+        # with its scene, so the file opens showing the object and the baked frame range (an object alone opened
+        # to an empty scene, "Library file, loading empty scene", reachable only through Append)
+        scene = ob.users_scene[0]
+        scene.camera = None
+        bpy.data.libraries.write(str(path), {scene, ob}, fake_user=True)
         result = {"FINISHED"}
     if "FINISHED" not in result or not path.exists():
         raise OSError(f"{path}: Blender's {suffix} exporter did not write the file ({result})")

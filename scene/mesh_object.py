@@ -95,6 +95,15 @@ def _get_attr(me: bpy.types.Mesh, name: str, key: str, dtype, count: int, width:
     return out.reshape(-1, width) if width > 1 else out
 
 
+def simulated_fold_angles(ob: bpy.types.Object) -> np.ndarray | None:
+    """The last run's simulated fold angles per edge (``cf_fold_angle_sim``, degrees, unwrapped as the solver keeps
+    them: a valley past flat is 199°), in :func:`read_fold_mesh`'s edge order; ``None`` if the mesh has none."""
+    me = ob.data
+    if me.attributes.get("cf_fold_angle_sim") is None:
+        return None
+    return _get_attr(me, "cf_fold_angle_sim", "value", np.float32, len(me.edges)).astype(np.float64)
+
+
 def assignment_codes(assignments: np.ndarray) -> np.ndarray:
     """FOLD letters → their index in :data:`ASSIGNMENTS` (the ``cf_assignment`` code), vectorised."""
     letters = np.asarray(assignments, dtype="<U1")

@@ -158,6 +158,81 @@ def test_solidify_reaches_stl_in_millimetres_and_animated_glb(empty_scene, wavy,
     assert not list(bpy.data.objects) or list(bpy.data.objects) == [holder]  # the temporary scene left nothing
 
 
+def test_export_follows_the_users_scene_units_turn_and_scale(empty_scene, wavy, tmp_path):
+    """The source object's modifiers are copied into the export's own scene (unit scale 1, metres): a Solidify of
+    0.5 in a scene of 1 unit = 1 mm came out 0.5 m thick, the model ~1000× too big. Its rotation and scale were
+    left out (a model turned to lie flat, or scaled up, exported as folded)."""
+    mesh, frames = wavy
+    empty_scene.unit_settings.scale_length = 0.001  # 1 BU = 1 mm
+    holder = bpy.data.objects.new("Holder", bpy.data.meshes.new("Holder"))
+    empty_scene.collection.objects.link(holder)
+    holder.modifiers.new("Thickness", "SOLIDIFY").thickness = 0.5  # 0.5 mm
+    path = export.export_folded_file(tmp_path / "w.stl", mesh, frames[-1], modifiers_from=holder)
+    extent = np.ptp(read_binary_stl(path).reshape(-1, 3), axis=0)
+    assert np.all(np.abs(extent - np.ptp(frames[-1], axis=0)) < 2.0), extent  # millimetres of paper, not metres
+    holder.modifiers.clear()
+    holder.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    holder.scale = (2.0, 2.0, 2.0)
+    bpy.context.view_layer.update()
+    path = export.export_folded_file(tmp_path / "t.stl", mesh, frames[-1], modifiers_from=holder)
+    turned = 2.0 * frames[-1] @ np.array(holder.matrix_world.to_3x3().normalized()).T
+    np.testing.assert_allclose(np.ptp(read_binary_stl(path).reshape(-1, 3), axis=0), np.ptp(turned, axis=0), atol=1e-3)
+
+
+def test_blend_export_opens_showing_the_folded_object(empty_scene, wavy, tmp_path):
+    """The .blend held the object alone, so File ▸ Open showed an empty scene ("Library file, loading empty
+    scene"); it now holds the export's scene, with the object in it and the baked frame range."""
+    mesh, frames = wavy
+    path = export.export_folded_file(tmp_path / "w.blend", mesh, frames, name="Wavy", frame_numbers=[5, 10, 15])
+    with bpy.data.libraries.load(str(path), link=True) as (data_from, data_to):
+        data_to.scenes = list(data_from.scenes)
+    try:
+        assert len(data_to.scenes) == 1
+        scene = data_to.scenes[0]
+        assert [ob.name for ob in scene.objects] == ["Wavy"]
+        assert (scene.frame_start, scene.frame_end) == (5, 15)
+    finally:
+        for lib in list(bpy.data.libraries):
+            bpy.data.libraries.remove(lib)
+
+
+def test_fold_angles_past_flat_keep_their_sign_through_the_frames(wavy):
+    """The geometry gives angles in (−180°, 180°]: a valley driven past flat reads −161°. Followed from the flat
+    sheet through the frames (or from the solver's own angles) it stays 199°, which a FOLD file writes as 180°;
+    the add-on's FOLD export wrote −161° (the command line, from the solver, 180°)."""
+    from curved_fold.core.metrics import measures
+
+    mesh, _ = wavy
+    inner = np.flatnonzero(np.isfinite(measures.fold_angles(mesh, mesh.vertices_3d)))
+    e = inner[0]
+    t1, t2 = (
+        int(t)
+        for t in np.flatnonzero(
+            np.any(np.isin(mesh.triangles, mesh.edges[e]), axis=1)
+            & (np.sum(np.isin(mesh.triangles, mesh.edges[e]), axis=1) == 2)
+        )
+    )
+    a, b = mesh.edges[e]
+    far = [int(v) for v in mesh.triangles[t2] if v not in (a, b)][0]
+    flat = mesh.vertices_3d
+    axis = (flat[b] - flat[a]) / np.linalg.norm(flat[b] - flat[a])
+    frames = []
+    for deg in (60.0, 120.0, 170.0, 199.0):  # turn the far corner of the second triangle about the edge
+        th = np.radians(deg)
+        r = flat[far] - flat[a]
+        turned = r * np.cos(th) + np.cross(axis, r) * np.sin(th) + axis * (axis @ r) * (1 - np.cos(th))
+        p = flat.copy()
+        p[far] = flat[a] + turned
+        frames.append(p)
+    wrapped = measures.fold_angles(mesh, frames[-1])[e]
+    followed = [a_[e] for a_ in measures.unwrapped_fold_angles(mesh, frames)]
+    assert abs(abs(wrapped) - 161.0) < 1e-6 and abs(abs(followed[-1]) - 199.0) < 1e-6
+    assert np.sign(followed[-1]) == np.sign(followed[0])  # the same side as it started folding
+    start = np.zeros(len(mesh.edges))
+    start[e] = followed[-1]
+    assert measures.unwrapped_fold_angles(mesh, frames[-1:], start)[0][e] == pytest.approx(followed[-1])
+
+
 def test_svg_export_keeps_cut_role_and_reimports(empty_scene, tmp_path):
     src = tmp_path / "slit.svg"
     src.write_text(SLIT_SVG)

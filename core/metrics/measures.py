@@ -72,6 +72,25 @@ def fold_angles(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray:
     return out
 
 
+def unwrapped_fold_angles(
+    mesh: FoldMesh, frames: list[np.ndarray], start: np.ndarray | None = None
+) -> list[np.ndarray]:
+    """:func:`fold_angles` of each of ``frames`` (positions, mm, in the order they fold), each angle taken by whole
+    turns to the one nearest the last frame's (the first frame's nearest ``start``, default flat: 0).
+
+    The geometry gives angles in (−180°, 180°], so a valley driven past flat (199°) reads −161°, the wrong sign for
+    its assignment; the solver keeps them unwrapped, and this follows the frames as it does. (An export of the
+    add-on's frames wrote such valleys as −161° to −168° where the command line writes the solver's 180°.)"""
+    last = np.zeros(len(mesh.edges)) if start is None else np.nan_to_num(np.asarray(start, dtype=float))
+    out = []
+    for positions in frames:
+        a = fold_angles(mesh, positions)
+        a = a + 360.0 * np.round((last - a) / 360.0)
+        out.append(a)
+        last = np.where(np.isfinite(a), a, last)
+    return out
+
+
 def edge_strain(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray:
     """|ℓ/L0 − 1| per edge."""
     p = np.asarray(positions, dtype=float)

@@ -64,8 +64,8 @@ def run(args: argparse.Namespace) -> int:
             pattern = discretize(curves, interval=args.interval, tolerance=args.tolerance, merge_tolerance=args.merge)
             pattern.warnings = warnings + pattern.warnings
     ms = (time.perf_counter() - t0) * 1e3
+    written = write_pattern_fold(out, pattern)  # first: the summary below may meet a closed pipe (`| head`)
     if args.quiet:
-        write_pattern_fold(out, pattern)
         return 0
     print(f"read {path} ({ms:.0f} ms)")
     if is_fold:
@@ -90,6 +90,5 @@ def run(args: argparse.Namespace) -> int:
     print(f"from curves: {int(pattern.edge_from_curve.sum())}")
     for w in pattern.warnings:
         print(f"warning: {w}")
-    written = write_pattern_fold(out, pattern)
     print(f"wrote {written}")
     return 0

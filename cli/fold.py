@@ -15,14 +15,20 @@ from ..core.pattern.model import PatternError
 from .outputs import check_outputs, finite_json
 from .progress import Progress
 
-OUTPUT_SUFFIXES = (".fold", ".obj", ".glb", ".blend")
+OUTPUT_SUFFIXES = (".fold", ".obj", ".stl", ".glb", ".blend")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``fold`` subcommand."""
     p = sub.add_parser("fold", help="fold a crease pattern (.svg/.fold/.blend) and write the folded mesh")
     p.add_argument("input", help="crease pattern: .svg, .fold or .blend")
-    p.add_argument("--out", required=True, help="output: .fold, .obj, .glb or .blend")
+    p.add_argument("--out", required=True, help="output: .fold, .obj, .stl, .glb or .blend")
+    p.add_argument(
+        "--unit",
+        default=None,
+        choices=("mm", "m"),
+        help="length unit of .stl/.obj output (default: millimetres for STL, metres for OBJ)",
+    )
     p.add_argument("--angle", type=float, default=None, help="fold angle (deg, -180..180) for creases without one")
     p.add_argument("--percent", type=float, default=100.0, help="fold percent, 0–100 (default 100)")
     p.add_argument("--interval", type=float, default=None, help="max chord length of discretised curves (mm)")
@@ -90,7 +96,11 @@ def _exporter_output(tmp: Path, out: Path, quiet: bool) -> Iterator[_Captured]:
                 os.close(fd)
             if not log.failed and not quiet:
                 sink.seek(0)
-                sys.stdout.write(_user_paths(sink.read().decode("utf-8", "replace"), tmp, out))
+                try:
+                    sys.stdout.write(_user_paths(sink.read().decode("utf-8", "replace"), tmp, out))
+                    sys.stdout.flush()
+                except BrokenPipeError:  # no one reads the output any more (`| head -1`): the write goes on
+                    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def _user_paths(text: str, tmp: Path, out: Path) -> str:
@@ -105,8 +115,9 @@ def _user_paths(text: str, tmp: Path, out: Path) -> str:
     return text.replace(str(tmp), str(out)).replace(tmp.name, out.name)
 
 
-def _write_mesh(tmp: Path, out: Path, fold, quiet: bool = False) -> None:
-    """Write the folded mesh to the temporary path ``tmp`` in the format of ``out``'s suffix."""
+def _write_mesh(tmp: Path, out: Path, fold, quiet: bool = False, unit: str | None = None) -> None:
+    """Write the folded mesh to the temporary path ``tmp`` in the format of ``out``'s suffix (``unit``: of STL/OBJ,
+    ``"mm"`` or ``"m"``; their defaults otherwise)."""
     if out.suffix.lower() == ".fold":
         from ..core.io.fold import write_folded_fold
 
@@ -118,9 +129,11 @@ def _write_mesh(tmp: Path, out: Path, fold, quiet: bool = False) -> None:
         raise PatternError(f"--out {out}: {out.suffix} output needs Blender's bpy ({exc})") from exc
     with _exporter_output(tmp, out, quiet) as log:
         try:
-            export_folded_file(tmp, fold.mesh, fold.result.positions, fold_angles=fold.result.fold_angles)
+            export_folded_file(tmp, fold.mesh, fold.result.positions, fold_angles=fold.result.fold_angles, unit=unit)
         except (RuntimeError, OSError) as exc:  # Blender operators raise RuntimeError("Error: ..."), .blend OSError
             log.failed = True
+            if _last_error_line(exc).startswith("KeyboardInterrupt"):  # Ctrl-C inside the exporter: interrupted
+                raise KeyboardInterrupt from None
             raise OutputError(f"--out {out}: Blender's {out.suffix} exporter failed: {_last_error_line(exc)}") from None
     try:
         check_complete(tmp, out.suffix, fold.mesh.n_vertices)
@@ -137,6 +150,8 @@ def run(args: argparse.Namespace) -> int:
     if out.suffix.lower() not in OUTPUT_SUFFIXES:
         raise PatternError(f"--out {out}: unknown output type {out.suffix!r}; use one of {', '.join(OUTPUT_SUFFIXES)}")
     _check_numbers(args)
+    if args.unit is not None and out.suffix.lower() not in (".stl", ".obj"):
+        raise PatternError(f"--unit {args.unit}: only .stl and .obj outputs have a choice of unit (glTF is metres)")
     check_outputs(args.input, {"--out": out, "--report": args.report})
     progress = Progress(quiet=args.quiet)
     with progress.stage(Path(args.input).name):
@@ -154,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
     r = fold.report
     # both files or neither: the report is moved into place first, and if that fails the mesh is not written
     with atomic_output(out) as tmp_out, contextlib.ExitStack() as stack:
-        _write_mesh(tmp_out, out, fold, args.quiet)
+        _write_mesh(tmp_out, out, fold, args.quiet, args.unit)
         if args.report:
             tmp_report = stack.enter_context(atomic_output(args.report))
             text = json.dumps(finite_json(r), indent=2, allow_nan=False)

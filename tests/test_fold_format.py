@@ -21,7 +21,8 @@ from curved_fold.core.io.fold import (
 )
 from curved_fold.core.io.reader import read_curves, read_pattern
 from curved_fold.core.mesh.fold_mesh import FoldMesh
-from curved_fold.core.pattern.model import PatternError
+from curved_fold.core.pattern.discretize import discretize
+from curved_fold.core.pattern.model import CreaseCurve, CurveSegment, PatternError
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -86,6 +87,23 @@ def test_svg_to_fold_and_back_is_lossless(path: Path, tmp_path: Path) -> None:
     out2 = tmp_path / "p2.fold"
     write_pattern_fold(out2, back)
     assert out2.read_bytes() == out.read_bytes()
+
+
+def test_a_pattern_with_cuts_says_fold_1_2(tmp_path: Path) -> None:
+    """Cut ("C") edges came with FOLD 1.2: a pattern that has them says so (it said 1.1), with the "cuts" frame
+    attribute the spec recommends."""
+    border = CreaseCurve(
+        [
+            CurveSegment("line", np.array(p, float))
+            for p in ([[0, 0], [10, 0]], [[10, 0], [10, 10]], [[10, 10], [0, 10]], [[0, 10], [0, 0]])
+        ],
+        "B",
+        None,
+        source="border",
+    )
+    cut = CreaseCurve([CurveSegment("line", np.array([[3.0, 5.0], [7.0, 5.0]]))], "C", None, source="slit")
+    data = json.loads(write_pattern_fold(tmp_path / "c.fold", discretize([border, cut])).read_text())
+    assert data["file_spec"] == 1.2 and "cuts" in data["frame_attributes"]
 
 
 def square_mesh() -> FoldMesh:

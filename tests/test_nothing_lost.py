@@ -460,6 +460,29 @@ def test_signal_during_a_write_removes_the_temporary_file(tmp_path, signum):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.fold"]
 
 
+def test_temporary_files_of_a_killed_run_are_swept_by_the_next_write(tmp_path):
+    """SIGKILL leaves no chance to clean up: the killed run's temporary file (and the one a Blender exporter writes
+    inside it) stayed in the user's folder for good. The next write to the same file removes those of processes
+    that are gone, and leaves a write in progress (a live process's) alone."""
+    out = tmp_path / "out.fold"
+    out.write_bytes(OLD_BYTES)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.Popen([sys.executable, "-c", SIGNAL_WRITER, str(out)], stdout=subprocess.PIPE, text=True, env=env)
+    tmp = Path(proc.stdout.readline().strip())
+    inner = tmp.parent / f".{tmp.stem}.cf{proc.pid}-abc123.tmp.fold"  # an exporter's own temporary file
+    inner.write_bytes(b"x")
+    proc.kill()
+    proc.wait(timeout=30)
+    assert tmp.exists() and out.read_bytes() == OLD_BYTES
+    live = tmp_path / f".out.cf{os.getpid()}-live.tmp.fold"
+    live.write_bytes(b"in progress")
+    other = tmp_path / ".other.cf999999999-x.tmp.fold"  # another file's: not this write's business
+    other.write_bytes(b"x")
+    atomic_write_text(out, "new")
+    assert out.read_text() == "new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["out.fold", live.name, other.name])
+
+
 def test_report_json_has_no_infinity(tmp_path):
     import json
 

@@ -102,9 +102,57 @@ def test_cli_summary_says_no_warp_instead_of_nan(tmp_path, capfd):
     assert json.loads(rep.read_text())["warp_mean_deg"] is None
 
 
+def test_cli_writes_stl_in_millimetres_for_slicers(tmp_path, capsys):
+    """The command line had no millimetre output: its OBJ is in metres (a slicer read wavy_pleats as 0.065 mm) and
+    .stl was an unknown output type. STL is written in millimetres, Z up, as the add-on's Export does; ``--unit``
+    chooses for STL and OBJ and is refused for the others (glTF is metres)."""
+    import struct
+
+    from curved_fold.cli import main
+
+    def extent(path: Path) -> np.ndarray:
+        raw = path.read_bytes()
+        (count,) = struct.unpack_from("<I", raw, 80)
+        rec = np.frombuffer(
+            raw, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]), count=count, offset=84
+        )
+        return np.ptp(rec["v"].reshape(-1, 3), axis=0).astype(np.float64)
+
+    src = str(FIXTURES / "wavy_pleats.svg")
+    rep = tmp_path / "w.json"
+    assert main(["fold", src, "--out", str(tmp_path / "w.stl"), "--report", str(rep), "-q"]) == 0
+    mm = extent(tmp_path / "w.stl")
+    assert 40.0 < mm.max() < 120.0 and mm.min() > 10.0  # a folded 112 mm sheet, in millimetres
+    assert main(["fold", src, "--out", str(tmp_path / "m.stl"), "--unit", "m", "-q"]) == 0
+    np.testing.assert_allclose(extent(tmp_path / "m.stl"), mm / 1000.0, rtol=1e-5)
+    assert main(["fold", src, "--out", str(tmp_path / "w.glb"), "--unit", "mm"]) == 2
+    assert "--unit mm: only .stl and .obj outputs have a choice of unit" in capsys.readouterr().err
+
+
+def test_cli_output_to_a_closed_pipe_still_writes_and_succeeds(tmp_path):
+    """`curved_fold fold … | head -1`: the reader of the summary goes away. The files were written, yet the run
+    exited 2 with "Broken pipe" — or, where the exporter's own line met the closed pipe, wrote nothing."""
+    import os
+    import subprocess
+    import sys
+
+    out, rep = tmp_path / "p.obj", tmp_path / "p.json"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "curved_fold", "fold", str(FIXTURES / "wavy_pleats.svg"), "--out", str(out)]
+        + ["--report", str(rep)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=Path(__file__).resolve().parents[1],
+        env=dict(os.environ),  # as test_cli_discretize: the venv finds the package (the parent's sys.path would
+    )  # put bpy's own scripts folder before the bpy module once a test has imported it)
+    proc.stdout.close()  # nobody reads the summary
+    assert proc.wait(timeout=300) == 0, proc.stderr.read().decode()
+    assert out.stat().st_size > 0 and json.loads(rep.read_text())["converged"]
+
+
 def test_cli_rejects_unknown_output_suffix(tmp_path, capsys):
     from curved_fold.cli import main
 
-    code = main(["fold", "whatever.svg", "--out", str(tmp_path / "x.stl")])
+    code = main(["fold", "whatever.svg", "--out", str(tmp_path / "x.ply")])
     assert code == 2
     assert "unknown output type" in capsys.readouterr().err

@@ -11,7 +11,8 @@ If anything fails the temporary file is removed and the destination is left unto
   is replaced, the link stays a link); a device, FIFO, socket or folder is refused (``--out /dev/sda`` must not turn
   a disk node into a regular file, nor a FIFO hang the command line).
 * Temporary files alive at any moment are listed in a registry; :func:`install_signal_cleanup` makes SIGINT and
-  SIGTERM remove them before the process stops (``.NAME.xxxx.tmp.fold`` never survives a killed run).
+  SIGTERM remove them before the process stops; those of a process killed outright (SIGKILL) are removed by the
+  next write to the same file (:func:`sweep_orphans`).
 
 The file gets the mode a plain ``open(path, "w")`` would give it (an existing file keeps its mode; a new one 0o666
 less the umask), not the private 0o600 of a temporary file. Error messages name the user's path, never the
@@ -139,8 +140,11 @@ def atomic_output(path: str | os.PathLike[str], *, allow_empty: bool = False) ->
     """
     user = Path(path)
     dest = output_target(user)
+    sweep_orphans(dest)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=f".tmp{dest.suffix}", dir=dest.parent)
+        fd, tmp = tempfile.mkstemp(
+            prefix=f".{dest.stem}.cf{os.getpid()}-", suffix=f".tmp{dest.suffix}", dir=dest.parent
+        )
     except OSError as exc:
         raise OutputError(f"{user}: cannot write: {exc.strerror or exc}", exc.errno) from None
     os.close(fd)
@@ -168,6 +172,43 @@ def atomic_output(path: str | os.PathLike[str], *, allow_empty: bool = False) ->
         _fsync_folder(dest.parent)
     finally:
         _remove(tmp)
+
+
+def sweep_orphans(dest: Path) -> list[str]:
+    """Remove the temporary files of earlier writes to ``dest`` whose process is gone (POSIX); returns their names.
+
+    A temporary file names its writer's process (``.NAME.cf<pid>-xxxx.tmp.glb``; Blender's exporters write one of
+    their own inside it, ``..NAME.cf<pid>-xxxx.tmp.cf<pid>-yyyy.tmp.glb``). The signal handlers remove them on
+    SIGINT and SIGTERM, but a process killed outright (SIGKILL, a power cut) cannot: they were left in the user's
+    folder for good. The next write to the same file removes those whose every named process is no longer
+    running; a write still in progress in another process is left alone."""
+    if os.name != "posix":  # os.kill(pid, 0) is a liveness test only on POSIX
+        return []
+    import re
+
+    pattern = re.compile(r"^\.{1,2}" + re.escape(dest.stem) + r"\.cf\d+-.*\.tmp" + re.escape(dest.suffix) + "$")
+    removed = []
+    try:
+        names = [n for n in os.listdir(dest.parent) if pattern.match(n)]
+    except OSError:
+        return removed
+    for name in names:
+        if not any(_alive(int(pid)) for pid in re.findall(r"\.cf(\d+)-", name)):
+            with contextlib.suppress(OSError):
+                os.unlink(dest.parent / name)
+                removed.append(name)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists (POSIX; a process of another user counts as alive)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:

@@ -593,6 +593,7 @@ def pattern_to_fold(pattern: CreasePattern) -> dict[str, Any]:
     data = _header("creasePattern", "2D", "mm")
     if np.any(pattern.assignments == "C"):
         data["frame_attributes"].append("cuts")
+        data["file_spec"] = 1.2  # "C" edges were added in FOLD 1.2
     unset = np.isin(pattern.assignments, ("M", "V")) & ~np.isfinite(pattern.fold_angles)
     data.update(
         {

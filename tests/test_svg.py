@@ -610,3 +610,26 @@ def test_nested_uses_cannot_multiply_the_elements_without_bound() -> None:
     with pytest.raises(PatternError, match=r"deep\.svg \(<use> copies included\): number of SVG elements 50,001"):
         parse_svg_text(svg("\n".join(levels), head=XLINK), "deep.svg")
     assert time.perf_counter() - t0 < 5.0
+
+
+# ------------------------------------------------------------------------------------------------ hidden elements
+
+
+def test_hidden_elements_are_not_read_and_a_visible_child_shows_through() -> None:
+    """``visibility`` hidden/collapse (attribute, style or CSS) hides shapes as ``display:none`` does, but it is
+    inherited and a child may say ``visible`` (SVG 1.1 §11.5). A tester's file kept an old version of a crease in a
+    ``<g visibility="hidden">`` and it was folded with the shown one."""
+    d = parse_svg_text(
+        svg(
+            "<style>.gone { visibility: collapse }</style>\n"
+            '<line id="shown" stroke="blue" x1="50" y1="0" x2="50" y2="100"/>\n'
+            '<g id="old" visibility="hidden"><line id="a" stroke="red" x1="0" y1="50" x2="100" y2="50"/>\n'
+            '<line id="back" stroke="red" visibility="visible" x1="0" y1="60" x2="100" y2="60"/></g>\n'
+            '<line id="b" stroke="red" style="visibility:hidden" x1="0" y1="70" x2="100" y2="70"/>\n'
+            '<line id="c" class="gone" stroke="red" x1="0" y1="80" x2="100" y2="80"/>\n'
+            '<g style="visibility:collapse"><g visibility="inherit"><line id="d" stroke="red" x2="1"/></g></g>'
+        ),
+        "v.svg",
+    )
+    assert [c.source for c in d.curves] == ["SVG <line id='shown'> (line 3)", "SVG <line id='back'> (line 5)"]
+    assert d.warnings == []

@@ -16,6 +16,8 @@ What is read:
   those rgb values); ``opacity × stroke-opacity × 180°`` gives the fold angle (mountain negative);
 * presentation attributes < ``<style>`` rules (type, ``.class``, ``#id`` selectors, comma lists) < inline ``style``;
   ``stroke``/``stroke-opacity`` inherit from ancestors, ``opacity`` is the element's own;
+* hidden elements are not read: ``display:none`` (the element and everything in it) and ``visibility`` ``hidden`` or
+  ``collapse`` (inherited, so a child that says ``visible`` is read, as SVG draws it);
 * units: ``viewBox`` with ``width``/``height`` in physical units give the user unit → mm scale; otherwise one user
   unit is one CSS px = 25.4/96 mm. Points are then mapped (x, y) → (x, −y) so the sheet is y-up in mm.
 
@@ -941,6 +943,14 @@ def _lines(lines: list[int]) -> str:
     return f"line {shown}" if len(lines) == 1 else f"lines {shown}"
 
 
+def _invisible(style: dict[str, str]) -> bool:
+    """Whether a shape's inherited ``visibility`` hides it (``hidden``/``collapse``; a child may say ``visible``).
+
+    Unlike ``display:none`` the property is inherited and only hides the shapes themselves, so it is read where a
+    shape is drawn, not where a group starts: that is what lets a visible child show through a hidden group."""
+    return style.get("visibility", "").strip().lower() in ("hidden", "collapse")
+
+
 def _describe(elem: _Element) -> str:
     ident = elem.attrib.get("id")
     tag = f"<{elem.tag} id='{ident}'>" if ident else f"<{elem.tag}>"
@@ -1010,6 +1020,8 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
                 todo.append((target, compose(matrix, shift, where, f"x={x:g} y={y:g}"), style, (*via, elem)))
             return
         if elem.tag in SHAPES:
+            if _invisible(style):
+                return
             stroke = style.get("stroke")
             assignment = stroke_assignment(stroke)
             subpaths = _shape_subpaths(elem, where, segment_budget)

@@ -385,7 +385,22 @@ def test_viewbox_origin_and_aspect_ratio_meet() -> None:
         ("#f0f", "U"),
         ("#c80000", None),
         ("#fe0000", None),
-        ("rgba(255,0,0,0.5)", None),
+        ("rgba(255,0,0,0.5)", "M"),
+        ("hsl(0, 100%, 50%)", "M"),
+        ("hsl(240deg 100% 50%)", "V"),
+        ("hsla(0.5turn,100%,50%,1)", None),  # cyan
+        ("rgb(0 0 255)", "V"),
+        ("rgb(0 0 255 / 60%)", "V"),
+        ("rgb(0% 0% 100%)", "V"),
+        ("#ff000099", "M"),
+        ("#f009", "M"),
+        ("#F00F", "M"),
+        ("rgb(0 0 255 0.5)", None),
+        ("rgb(0, 0 255)", None),
+        ("rgb(255,0,0,0.5,1)", None),
+        ("rgb(nan,0,0)", None),  # a ValueError traceback before
+        ("rgb(1e999,0,0)", None),  # an OverflowError traceback before
+        ("#ff00009", None),
         ("none", None),
         ("gray", None),
         (None, None),
@@ -418,6 +433,36 @@ def test_opacity_gives_the_fold_angle() -> None:
     angles = [c.fold_angle for c in cs]
     assert angles[:3] == [pytest.approx(-90), pytest.approx(108), pytest.approx(45)]
     assert angles[3:] == [None, 0.0, None, None]
+
+
+def test_every_css_spelling_of_a_role_colour_is_read_and_its_alpha_is_a_stroke_opacity() -> None:
+    """hsl(), rgb() in CSS Color 4's space syntax (with ``/ alpha``), rgba(), percentages, 8- and 4-digit hex: a
+    tester's files had them skipped as "unknown stroke colour". The alpha multiplies the fold angle as
+    stroke-opacity does (and with it: 0.6 × 0.5 × 180° = 54°)."""
+    strokes = [
+        'stroke="hsl(0, 100%, 50%)" stroke-opacity="0.6"',
+        'stroke="rgb(0 0 255)" stroke-opacity="0.6"',
+        'stroke="rgb(0 0 255 / 60%)"',
+        'stroke="rgba(255,0,0,0.6)"',
+        'stroke="rgb(0%,0%,100%)" stroke-opacity=".6"',
+        'stroke="#ff000099"',
+        'stroke="#f009"',
+        'stroke="rgba(255, 0, 0, .6)" stroke-opacity="0.5"',
+        'style="stroke: hsla(240 100% 50% / 0.6)" opacity="0.5"',
+    ]
+    d = parse_svg_text(svg("\n".join(f'<line {s} x2="1"/>' for s in strokes)), "c.svg")
+    assert d.warnings == []
+    got = [(c.assignment, round(c.fold_angle, 9)) for c in d.curves]
+    assert got == [("M", -108), ("V", 108), ("V", 108), ("M", -108), ("V", 108), ("M", -108), ("M", -108)] + [
+        ("M", -54),
+        ("V", 54),
+    ]
+
+
+def test_unknown_colour_is_shown_as_written() -> None:
+    """The warning quotes the stroke as the file has it: ``rgb(0 0 254)`` was shown as ``rgb(00254)``."""
+    d = parse_svg_text(svg('<line stroke="red" x2="1"/>\n<line stroke=" rgb(0 0 254) " x2="1"/>'), "w.svg")
+    assert d.warnings == ["w.svg: unknown stroke colours (elements skipped): rgb(0 0 254) (1 element: line 3)"]
 
 
 def test_css_cascade_inheritance_and_precedence() -> None:

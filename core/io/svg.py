@@ -13,7 +13,9 @@ What is read:
   ``transform`` then ``x``/``y``, inheriting the use's stroke; a use that names nothing or would draw itself again
   is skipped with a warning, and the copies count against the element limit (nested uses cannot multiply them);
 * the stroke colour, which gives the assignment by EXACT match with Origami Simulator's table (any CSS spelling of
-  those rgb values); ``opacity × stroke-opacity × 180°`` gives the fold angle (mountain negative);
+  those rgb values: keywords, 3/4/6/8-digit hex, ``rgb()``/``rgba()``/``hsl()``/``hsla()`` with commas or spaces,
+  numbers or percentages); ``opacity × stroke-opacity × alpha × 180°`` gives the fold angle (mountain negative),
+  the alpha of the colour (``rgba(255,0,0,0.6)``, ``#ff000099``) counting as stroke-opacity does;
 * presentation attributes < ``<style>`` rules (type, ``.class``, ``#id`` selectors, comma lists) < inline ``style``;
   ``stroke``/``stroke-opacity`` inherit from ancestors, ``opacity`` is the element's own;
 * hidden elements are not read: ``display:none`` (the element and everything in it) and ``visibility`` ``hidden`` or
@@ -350,56 +352,99 @@ def _own_style(elem: _Element, rules: list[_Rule]) -> dict[str, str]:
 # ----------------------------------------------------------------------------------------------------- colours
 
 
-def _parse_colour(value: str) -> tuple[int, int, int] | None:
-    """An sRGB triple for a CSS colour spelling (hex, keyword, ``rgb()`` with numbers or percentages), else None."""
-    v = value.lower().replace(" ", "")
+_HUE_UNITS = {"": 1.0, "deg": 1.0, "grad": 0.9, "rad": 180.0 / math.pi, "turn": 360.0}
+"""Degrees per unit of an ``hsl()`` hue."""
+
+
+def _css_number(text: str, full: float, units: dict[str, float] | None = None) -> float | None:
+    """A finite CSS number (lower case), a percentage of ``full``, or a number with one of ``units`` (value per
+    unit); else None."""
+    m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?)(%|[a-z]*)", text)
+    if not m or not math.isfinite(x := float(m.group(1))):
+        return None
+    unit = m.group(2)
+    if unit == "%":
+        return x * full / 100.0
+    scale = (units or {"": 1.0}).get(unit)
+    return None if scale is None else x * scale
+
+
+def _colour_arguments(body: str) -> tuple[list[str], str] | None:
+    """The three channels and the alpha ("1" if none) of ``rgb()``/``hsl()`` in the comma syntax ``0, 0, 255, 0.5``
+    or the space syntax of CSS Color 4 ``0 0 255 / 50%``; None if it is neither."""
+    if "," in body:
+        parts = [p.strip() for p in body.split(",")]
+        return (parts[:3], parts[3] if len(parts) == 4 else "1") if len(parts) in (3, 4) and "/" not in body else None
+    channels, slash, alpha = body.partition("/")
+    parts = channels.split()
+    if len(parts) != 3 or (slash and len(alpha.split()) != 1):
+        return None
+    return parts, alpha.strip() if slash else "1"
+
+
+def _hsl_rgb(h: float, s: float, lightness: float) -> tuple[float, float, float]:
+    """sRGB channels (0–255) of an HSL colour, by CSS Color 4's formula (hue in degrees, s and l from 0 to 1)."""
+    s, lightness = min(max(s, 0.0), 1.0), min(max(lightness, 0.0), 1.0)
+    a = s * min(lightness, 1.0 - lightness)
+
+    def channel(n: int) -> float:
+        k = (n + h / 30.0) % 12.0
+        return 255.0 * (lightness - a * max(-1.0, min(k - 3.0, 9.0 - k, 1.0)))
+
+    return channel(0), channel(8), channel(4)
+
+
+def _parse_colour(value: str) -> tuple[tuple[int, int, int], float] | None:
+    """(sRGB triple, alpha) of a CSS colour: keyword, ``#rgb``/``#rgba``/``#rrggbb``/``#rrggbbaa``, ``rgb()``/``rgba()``
+    and ``hsl()``/``hsla()`` in the comma or space syntax, with numbers or percentages; None for anything else or a
+    colour whose channels are not whole numbers (it cannot match the table exactly)."""
+    v = value.strip().lower()
     if v in NAMED_COLOURS:
-        return NAMED_COLOURS[v]
+        return NAMED_COLOURS[v], 1.0
     if v.startswith("#"):
         h = v[1:]
-        if len(h) in (3, 4) and all(c in "0123456789abcdef" for c in h):
-            if len(h) == 4 and h[3] != "f":
-                return None
-            return tuple(int(c * 2, 16) for c in h[:3])  # type: ignore[return-value]
-        if len(h) in (6, 8) and all(c in "0123456789abcdef" for c in h):
-            if len(h) == 8 and h[6:] != "ff":
-                return None
-            return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16))
-        return None
-    m = re.fullmatch(r"rgba?\(([^)]*)\)", v)
-    if m:
-        parts = m.group(1).split(",")
-        if len(parts) not in (3, 4):
+        if len(h) not in (3, 4, 6, 8) or any(c not in "0123456789abcdef" for c in h):
             return None
-        if len(parts) == 4:
-            try:
-                alpha = float(parts[3][:-1]) / 100 if parts[3].endswith("%") else float(parts[3])
-            except ValueError:
-                return None
-            if alpha != 1.0:
-                return None
-        rgb = []
-        for p in parts[:3]:
-            try:
-                x = float(p[:-1]) * 2.55 if p.endswith("%") else float(p)
-            except ValueError:
-                return None
-            if abs(x - round(x)) > 1e-6:
-                return None
-            rgb.append(int(round(x)))
-        return tuple(rgb)  # type: ignore[return-value]
-    return None
+        pairs = [c * 2 for c in h] if len(h) < 6 else [h[i : i + 2] for i in range(0, len(h), 2)]
+        channels = [int(p, 16) for p in pairs]
+        return (channels[0], channels[1], channels[2]), (channels[3] / 255.0 if len(channels) == 4 else 1.0)
+    m = re.fullmatch(r"(rgba?|hsla?)\(([^()]*)\)", v)
+    args = _colour_arguments(m.group(2)) if m else None
+    if m is None or args is None:
+        return None
+    (c1, c2, c3), alpha_text = args
+    alpha = _css_number(alpha_text, 1.0)
+    if m.group(1).startswith("rgb"):
+        rgb = [_css_number(c, 255.0) for c in (c1, c2, c3)]
+    else:
+        hsl = (_css_number(c1, 360.0, _HUE_UNITS), _css_number(c2, 1.0), _css_number(c3, 1.0))
+        rgb = list(_hsl_rgb(*hsl)) if None not in hsl else [None]  # type: ignore[arg-type]
+    if alpha is None or None in rgb or any(abs(x - round(x)) > 1e-6 for x in rgb):  # type: ignore[operator, arg-type]
+        return None
+    r, g, b = (int(round(x)) for x in rgb)  # type: ignore[arg-type]
+    return (r, g, b), min(max(alpha, 0.0), 1.0)
+
+
+def stroke_role(value: str | None) -> tuple[str, float] | None:
+    """(FOLD assignment, alpha) of a stroke value by Origami Simulator's exact colour table, or None if it is not one.
+
+    The alpha of a colour with one (``rgba(255, 0, 0, 0.6)``, ``#ff000099``) is read as ``stroke-opacity`` is: it
+    multiplies the fold angle, as a renderer multiplies it into the stroke's opacity."""
+    if value is None:
+        return None
+    v = value.strip().lower()
+    if v in LITERAL_ASSIGNMENTS:
+        return LITERAL_ASSIGNMENTS[v], 1.0
+    colour = _parse_colour(v)
+    if colour is None or colour[0] not in ASSIGNMENT_RGB:
+        return None
+    return ASSIGNMENT_RGB[colour[0]], colour[1]
 
 
 def stroke_assignment(value: str | None) -> str | None:
     """FOLD assignment for a stroke value by Origami Simulator's exact colour table, or None if it is not one."""
-    if value is None:
-        return None
-    v = value.strip().lower().replace(" ", "")
-    if v in LITERAL_ASSIGNMENTS:
-        return LITERAL_ASSIGNMENTS[v]
-    rgb = _parse_colour(v)
-    return ASSIGNMENT_RGB.get(rgb) if rgb is not None else None
+    role = stroke_role(value)
+    return role[0] if role is not None else None
 
 
 def _parse_opacity(value: str | None, what: str, where: str) -> float:
@@ -943,6 +988,14 @@ def _lines(lines: list[int]) -> str:
     return f"line {shown}" if len(lines) == 1 else f"lines {shown}"
 
 
+def _fold_angle(assignment: str, opacity: float) -> float | None:
+    """A stroke's fold angle from its total opacity (``opacity × stroke-opacity × alpha``): ∓180° × opacity for a
+    mountain/valley (None, "no angle given", at 0, so ``--angle`` can fill it), 0° for a facet, None otherwise."""
+    if assignment in ("M", "V") and opacity != 0.0:
+        return (-180.0 if assignment == "M" else 180.0) * opacity
+    return 0.0 if assignment == "F" else None
+
+
 def _invisible(style: dict[str, str]) -> bool:
     """Whether a shape's inherited ``visibility`` hides it (``hidden``/``collapse``; a child may say ``visible``).
 
@@ -1023,28 +1076,20 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
             if _invisible(style):
                 return
             stroke = style.get("stroke")
-            assignment = stroke_assignment(stroke)
+            role = stroke_role(stroke)
             subpaths = _shape_subpaths(elem, where, segment_budget)
             segment_budget -= sum(len(segs) for segs, _ in subpaths)
             if segment_budget < 0:
                 limits.PATH_SEGMENTS.check(limits.PATH_SEGMENTS.value - segment_budget, f"{source_name} ({where})")
             if not subpaths:
                 return
-            if assignment is None:
-                key = stroke.strip().lower().replace(" ", "") if stroke else "no stroke"
-                unknown.setdefault(key, []).append(elem.line)
+            if role is None:
+                unknown.setdefault(stroke.strip() if stroke else "no stroke", []).append(elem.line)  # as written
                 return
+            assignment, alpha = role
             opacity = _parse_opacity(own.get("opacity"), "opacity", where)
             stroke_opacity = _parse_opacity(style.get("stroke-opacity"), "stroke-opacity", where)
-            o = opacity * stroke_opacity
-            if assignment == "M":
-                angle: float | None = -180.0 * o if o != 0.0 else None
-            elif assignment == "V":
-                angle = 180.0 * o if o != 0.0 else None
-            elif assignment == "F":
-                angle = 0.0
-            else:
-                angle = None
+            angle = _fold_angle(assignment, opacity * stroke_opacity * alpha)
             for k, (raw_segs, closed) in enumerate(subpaths):
                 source = where if len(subpaths) == 1 else f"{where} subpath {k + 1}"
                 segments = [_to_segment(r, matrix) for r in raw_segs]

@@ -421,7 +421,7 @@ def test_unknown_colours_are_skipped_with_one_warning() -> None:
     assert len(d.curves) == 1
     assert len(d.warnings) == 1
     w = d.warnings[0]
-    assert "#123456 (3 elements: lines 2, 3, 6)" in w and "no stroke (1 element: line 4)" in w
+    assert "#123456 (3 elements: lines 2, 3, 6)" in w and "line 4" not in w  # a line without a stroke: not a crease
 
 
 def test_opacity_gives_the_fold_angle() -> None:
@@ -456,6 +456,28 @@ def test_every_css_spelling_of_a_role_colour_is_read_and_its_alpha_is_a_stroke_o
     assert got == [("M", -108), ("V", 108), ("V", 108), ("M", -108), ("V", 108), ("M", -108), ("M", -108)] + [
         ("M", -54),
         ("V", 54),
+    ]
+
+
+def test_shapes_without_a_stroke_are_skipped_quietly_and_filled_ones_noted() -> None:
+    """``stroke="none"`` (LibreOffice's invisible bounding boxes), no stroke or a transparent one draws no line, so
+    it cannot be a crease: it is skipped without the "unknown stroke colours" warning that listed it. Only a shape
+    filled in a role colour (SVG's default fill is black) is noted, in a line of its own: it may be the sheet drawn
+    as a silhouette."""
+    d = parse_svg_text(
+        svg(
+            '<rect class="BoundingBox" stroke="none" fill="none" x="-1" y="-1" width="102" height="102"/>\n'
+            '<line id="l" x2="3"/>\n<path stroke="transparent" fill="none" d="M0 0 L1 1"/>\n'
+            '<g fill="none"><circle r="4"/></g>\n'
+            '<line stroke="red" x2="4"/>\n'
+            '<rect id="sheet" width="100" height="100"/>\n<circle stroke="none" fill="#ff0" r="3"/>'
+        ),
+        "lo.svg",
+    )
+    assert [c.assignment for c in d.curves] == ["M"]
+    assert d.warnings == [
+        "lo.svg: 2 filled shape(s) without a stroke skipped (only strokes are read; to make one the sheet's outline, "
+        "give it a black stroke): SVG <rect id='sheet'> (line 7), SVG <circle> (line 8)"
     ]
 
 

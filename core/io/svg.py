@@ -118,7 +118,7 @@ SKIPPED_CONTAINERS = {
 """Elements whose contents never draw creases."""
 
 SHAPES = {"path", "line", "polyline", "polygon", "rect", "circle", "ellipse"}
-INHERITED = ("stroke", "stroke-opacity", "display", "visibility")
+INHERITED = ("stroke", "stroke-opacity", "fill", "display", "visibility")
 
 
 @dataclass
@@ -339,7 +339,7 @@ def _matches(rule: _Rule, elem: _Element) -> bool:
 def _own_style(elem: _Element, rules: list[_Rule]) -> dict[str, str]:
     """The element's own declared properties: attributes < matching CSS rules (by specificity, order) < ``style``."""
     props: dict[str, str] = {}
-    for key in ("stroke", "stroke-opacity", "opacity", "display", "visibility"):
+    for key in ("stroke", "stroke-opacity", "fill", "opacity", "display", "visibility"):
         if key in elem.attrib:
             props[key] = elem.attrib[key].strip()
     for rule in sorted((r for r in rules if _matches(r, elem)), key=lambda r: (r.specificity, r.order)):
@@ -988,6 +988,11 @@ def _lines(lines: list[int]) -> str:
     return f"line {shown}" if len(lines) == 1 else f"lines {shown}"
 
 
+def _no_stroke(stroke: str | None) -> bool:
+    """Whether a shape draws no line: no ``stroke`` (SVG's default is none), ``none`` or ``transparent``."""
+    return stroke is None or stroke.strip().lower() in ("none", "transparent", "")
+
+
 def _fold_angle(assignment: str, opacity: float) -> float | None:
     """A stroke's fold angle from its total opacity (``opacity × stroke-opacity × alpha``): ∓180° × opacity for a
     mountain/valley (None, "no angle given", at 0, so ``--angle`` can fill it), 0° for a facet, None otherwise."""
@@ -1035,6 +1040,7 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
     viewport, width_mm, height_mm = _viewport(root, source_name)
     curves: list[CreaseCurve] = []
     unknown: dict[str, list[int]] = {}
+    filled: list[str] = []  # shapes without a stroke, filled in a role colour: perhaps meant as the sheet
     unresolved: list[int] = []  # lines of <use> elements whose href names no element
     cycles: list[int] = []  # lines of <use> elements that would draw themselves again
     segment_budget = limits.PATH_SEGMENTS.value
@@ -1083,8 +1089,12 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
                 limits.PATH_SEGMENTS.check(limits.PATH_SEGMENTS.value - segment_budget, f"{source_name} ({where})")
             if not subpaths:
                 return
+            if _no_stroke(stroke):  # not drawn as a line, so not a crease (LibreOffice's bounding boxes)
+                if elem.tag != "line" and stroke_role(style.get("fill", "black")) is not None:
+                    filled.append(where)
+                return
             if role is None:
-                unknown.setdefault(stroke.strip() if stroke else "no stroke", []).append(elem.line)  # as written
+                unknown.setdefault((stroke or "").strip(), []).append(elem.line)  # as written
                 return
             assignment, alpha = role
             opacity = _parse_opacity(own.get("opacity"), "opacity", where)
@@ -1108,6 +1118,12 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
             label = "lines" if len(lines) > 1 else "line"
             parts.append(f"{colour} ({len(lines)} {noun}: {label} {shown})")
         warnings.append(f"{source_name}: unknown stroke colours (elements skipped): " + ", ".join(parts))
+    if filled:
+        more = f" and {len(filled) - 4} more" if len(filled) > 4 else ""
+        warnings.append(
+            f"{source_name}: {len(filled)} filled shape(s) without a stroke skipped (only strokes are read; to make "
+            f"one the sheet's outline, give it a black stroke): {', '.join(filled[:4])}{more}"
+        )
     if unresolved:
         warnings.append(
             f"{source_name}: <use> elements that name no element of the file are skipped ({_lines(unresolved)})"

@@ -1015,130 +1015,177 @@ def _describe(elem: _Element) -> str:
     return f"SVG {tag} (line {elem.line})"
 
 
+@dataclass(frozen=True)
+class _Place:
+    """How an element is drawn: its user units → mm (y up) matrix, the properties it inherits, and the ``<use>``
+    elements it is drawn through, innermost last (none for the element in its own place)."""
+
+    matrix: np.ndarray
+    style: dict[str, str]
+    via: tuple[_Element, ...] = ()
+
+
+class _Reader:
+    """One document's walk: every visible shape with a role colour becomes crease curves; what is skipped is kept
+    for one warning a kind (:meth:`warnings`). The tree is walked with an explicit stack (``todo``), not recursion."""
+
+    def __init__(self, root: _Element, source_name: str, warnings: list[str]) -> None:
+        self.root, self.source_name = root, source_name
+        self.rules: list[_Rule] = []
+        self.ids: dict[str, _Element] = {}  # the targets of <use> (the first element of each id, as browsers take it)
+        self.parents: dict[int, _Element] = {}  # id(element) → its parent, to refuse a <use> inside what it names
+        self._index(warnings)
+        self.curves: list[CreaseCurve] = []
+        self.unknown: dict[str, list[int]] = {}  # stroke as written → lines
+        self.filled: list[str] = []  # shapes without a stroke, filled in a role colour: perhaps meant as the sheet
+        self.unresolved: list[int] = []  # lines of <use> elements whose href names no element
+        self.cycles: list[int] = []  # lines of <use> elements that would draw themselves again
+        self.segment_budget = limits.PATH_SEGMENTS.value
+        self.visits_left = limits.SVG_ELEMENTS.value  # elements drawn, clones included: nested <use> cannot multiply
+        self.todo: list[tuple[_Element, _Place]] = []
+
+    def _index(self, warnings: list[str]) -> None:
+        """Ids, parents and ``<style>`` rules of the whole document, in document order."""
+        pending = [self.root]  # explicit stack (nesting depth is bounded by limits.NESTING anyway)
+        while pending:
+            elem = pending.pop()
+            if "id" in elem.attrib:
+                self.ids.setdefault(elem.attrib["id"], elem)
+            for child in elem.children:
+                self.parents[id(child)] = elem
+            if elem.tag == "style":
+                where = f"{self.source_name} <style> (line {elem.line})"
+                self.rules.extend(_parse_stylesheet(elem.text, warnings, where))
+            pending.extend(reversed(elem.children))
+        for i, r in enumerate(self.rules):
+            r.order = i
+
+    def read(self, place: _Place) -> None:
+        """Draw the document from its root, placed by ``place``."""
+        self.todo.append((self.root, place))
+        while self.todo:
+            self.visit(*self.todo.pop())
+
+    def visit(self, elem: _Element, place: _Place) -> None:
+        """Read one element; its children (or the element a ``<use>`` names) go on ``todo``."""
+        via = place.via
+        used = bool(via) and elem is self.ids.get(_href(via[-1]))  # the target of a <use>: a <symbol> is drawn there
+        if elem.tag.startswith("#foreign:") or (elem.tag in SKIPPED_CONTAINERS and not (used and elem.tag == "symbol")):
+            return
+        self.visits_left -= 1
+        if self.visits_left < 0:
+            limits.SVG_ELEMENTS.check(
+                limits.SVG_ELEMENTS.value - self.visits_left, f"{self.source_name} (<use> copies included)"
+            )
+        where = _describe(elem) + "".join(f" via <use> (line {u.line})" for u in reversed(via))
+        own = _own_style(elem, self.rules)
+        style = dict(place.style)
+        for key in INHERITED:
+            if key in own and own[key].lower() != "inherit":
+                style[key] = own[key]
+        if own.get("display", "").lower() == "none":
+            return
+        matrix = place.matrix
+        if "transform" in elem.attrib:
+            value = elem.attrib["transform"]
+            matrix = compose(matrix, parse_transform(value, where), where, value)
+        place = _Place(matrix, style, via)
+        if elem.tag == "use":
+            self._use(elem, place, where)
+        elif elem.tag in SHAPES:
+            self._shape(elem, place, own, where)
+        else:
+            self.todo.extend((child, place) for child in reversed(elem.children))
+
+    def _use(self, elem: _Element, place: _Place, where: str) -> None:
+        """A clone (Inkscape's Edit ▸ Clone): the element it names, moved by x, y, unless it names nothing or would
+        draw itself again."""
+        target = self.ids.get(_href(elem))
+        if target is None:
+            self.unresolved.append(elem.line)
+        elif any(target is a for u in (elem, *place.via) for a in _self_and_ancestors(u, self.parents)):
+            self.cycles.append(elem.line)
+        else:
+            x, y = _attr_float(elem, "x", where), _attr_float(elem, "y", where)
+            shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
+            matrix = compose(place.matrix, shift, where, f"x={x:g} y={y:g}")
+            self.todo.append((target, _Place(matrix, place.style, (*place.via, elem))))
+
+    def _shape(self, elem: _Element, place: _Place, own: dict[str, str], where: str) -> None:
+        """A visible shape: crease curves if its stroke has a role colour, else noted for a warning."""
+        style = place.style
+        if _invisible(style):
+            return
+        stroke = style.get("stroke")
+        role = stroke_role(stroke)
+        subpaths = _shape_subpaths(elem, where, self.segment_budget)
+        self.segment_budget -= sum(len(segs) for segs, _ in subpaths)
+        if self.segment_budget < 0:
+            limits.PATH_SEGMENTS.check(
+                limits.PATH_SEGMENTS.value - self.segment_budget, f"{self.source_name} ({where})"
+            )
+        if not subpaths:
+            return
+        if _no_stroke(stroke):  # not drawn as a line, so not a crease (LibreOffice's bounding boxes)
+            if elem.tag != "line" and stroke_role(style.get("fill", "black")) is not None:
+                self.filled.append(where)
+            return
+        if role is None:
+            self.unknown.setdefault((stroke or "").strip(), []).append(elem.line)  # as written
+            return
+        assignment, alpha = role
+        opacity = _parse_opacity(own.get("opacity"), "opacity", where)
+        stroke_opacity = _parse_opacity(style.get("stroke-opacity"), "stroke-opacity", where)
+        angle = _fold_angle(assignment, opacity * stroke_opacity * alpha)
+        for k, (raw_segs, closed) in enumerate(subpaths):
+            source = where if len(subpaths) == 1 else f"{where} subpath {k + 1}"
+            segments = [_to_segment(r, place.matrix) for r in raw_segs]
+            self.curves.append(CreaseCurve(segments, assignment, angle, closed=closed, source=source))
+
+    def warnings(self) -> list[str]:
+        """One line for each kind of element skipped."""
+        out: list[str] = []
+        name = self.source_name
+        if self.unknown:
+            parts = []
+            for colour, lines in self.unknown.items():
+                shown = ", ".join(str(x) for x in lines[:8]) + (", ..." if len(lines) > 8 else "")
+                noun = "element" if len(lines) == 1 else "elements"
+                label = "lines" if len(lines) > 1 else "line"
+                parts.append(f"{colour} ({len(lines)} {noun}: {label} {shown})")
+            out.append(f"{name}: unknown stroke colours (elements skipped): " + ", ".join(parts))
+        if self.filled:
+            more = f" and {len(self.filled) - 4} more" if len(self.filled) > 4 else ""
+            out.append(
+                f"{name}: {len(self.filled)} filled shape(s) without a stroke skipped (only strokes are read; to make "
+                f"one the sheet's outline, give it a black stroke): {', '.join(self.filled[:4])}{more}"
+            )
+        if self.unresolved:
+            out.append(
+                f"{name}: <use> elements that name no element of the file are skipped ({_lines(self.unresolved)})"
+            )
+        if self.cycles:
+            out.append(f"{name}: <use> elements that would draw themselves again are skipped ({_lines(self.cycles)})")
+        return out
+
+
 def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
     """Read an SVG document given as text; see the module docstring. ``source_name`` prefixes file-level errors."""
     root = _parse_xml(text, source_name)
     if root.tag != "svg":
         raise PatternError(f"{source_name}: not an SVG file (root element is <{root.tag}>, line {root.line})")
     warnings: list[str] = []
-    rules: list[_Rule] = []
-
-    ids: dict[str, _Element] = {}  # the targets of <use> (the first element of each id, as browsers take it)
-    parents: dict[int, _Element] = {}  # id(element) → its parent, to refuse a <use> inside what it names
-    pending = [root]  # document order, with an explicit stack (nesting depth is bounded by limits.NESTING anyway)
-    while pending:
-        elem = pending.pop()
-        if "id" in elem.attrib:
-            ids.setdefault(elem.attrib["id"], elem)
-        for child in elem.children:
-            parents[id(child)] = elem
-        if elem.tag == "style":
-            rules.extend(_parse_stylesheet(elem.text, warnings, f"{source_name} <style> (line {elem.line})"))
-        pending.extend(reversed(elem.children))
-    for i, r in enumerate(rules):
-        r.order = i
+    reader = _Reader(root, source_name, warnings)
     viewport, width_mm, height_mm = _viewport(root, source_name)
-    curves: list[CreaseCurve] = []
-    unknown: dict[str, list[int]] = {}
-    filled: list[str] = []  # shapes without a stroke, filled in a role colour: perhaps meant as the sheet
-    unresolved: list[int] = []  # lines of <use> elements whose href names no element
-    cycles: list[int] = []  # lines of <use> elements that would draw themselves again
-    segment_budget = limits.PATH_SEGMENTS.value
-    visits_left = limits.SVG_ELEMENTS.value  # elements drawn, clones included: nested <use> cannot multiply them
-
-    def visit(elem: _Element, matrix: np.ndarray, inherited: dict[str, str], via: tuple[_Element, ...] = ()) -> None:
-        """Read one element; its children go on ``todo`` (an explicit stack, not recursion). ``via``: the <use>
-        elements this copy is drawn through, innermost last (none for the element in its own place)."""
-        nonlocal segment_budget, visits_left
-        used = bool(via) and elem is ids.get(_href(via[-1]))  # the target of a <use>: a <symbol> is drawn there
-        if elem.tag.startswith("#foreign:") or (elem.tag in SKIPPED_CONTAINERS and not (used and elem.tag == "symbol")):
-            return
-        visits_left -= 1
-        if visits_left < 0:
-            limits.SVG_ELEMENTS.check(limits.SVG_ELEMENTS.value - visits_left, f"{source_name} (<use> copies included)")
-        where = _describe(elem) + "".join(f" via <use> (line {u.line})" for u in reversed(via))
-        own = _own_style(elem, rules)
-        style = dict(inherited)
-        for key in INHERITED:
-            if key in own and own[key].lower() != "inherit":
-                style[key] = own[key]
-        if own.get("display", "").lower() == "none":
-            return
-        if "transform" in elem.attrib:
-            value = elem.attrib["transform"]
-            matrix = compose(matrix, parse_transform(value, where), where, value)
-        if elem.tag == "use":  # a clone (Inkscape's Edit ▸ Clone): the element it names, moved by x, y
-            target = ids.get(_href(elem))
-            if target is None:
-                unresolved.append(elem.line)
-            elif any(target is a for u in (elem, *via) for a in _self_and_ancestors(u, parents)):
-                cycles.append(elem.line)
-            else:
-                x, y = _attr_float(elem, "x", where), _attr_float(elem, "y", where)
-                shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
-                todo.append((target, compose(matrix, shift, where, f"x={x:g} y={y:g}"), style, (*via, elem)))
-            return
-        if elem.tag in SHAPES:
-            if _invisible(style):
-                return
-            stroke = style.get("stroke")
-            role = stroke_role(stroke)
-            subpaths = _shape_subpaths(elem, where, segment_budget)
-            segment_budget -= sum(len(segs) for segs, _ in subpaths)
-            if segment_budget < 0:
-                limits.PATH_SEGMENTS.check(limits.PATH_SEGMENTS.value - segment_budget, f"{source_name} ({where})")
-            if not subpaths:
-                return
-            if _no_stroke(stroke):  # not drawn as a line, so not a crease (LibreOffice's bounding boxes)
-                if elem.tag != "line" and stroke_role(style.get("fill", "black")) is not None:
-                    filled.append(where)
-                return
-            if role is None:
-                unknown.setdefault((stroke or "").strip(), []).append(elem.line)  # as written
-                return
-            assignment, alpha = role
-            opacity = _parse_opacity(own.get("opacity"), "opacity", where)
-            stroke_opacity = _parse_opacity(style.get("stroke-opacity"), "stroke-opacity", where)
-            angle = _fold_angle(assignment, opacity * stroke_opacity * alpha)
-            for k, (raw_segs, closed) in enumerate(subpaths):
-                source = where if len(subpaths) == 1 else f"{where} subpath {k + 1}"
-                segments = [_to_segment(r, matrix) for r in raw_segs]
-                curves.append(CreaseCurve(segments, assignment, angle, closed=closed, source=source))
-            return
-        todo.extend((child, matrix, style, via) for child in reversed(elem.children))
-
-    todo: list[tuple[_Element, np.ndarray, dict[str, str], tuple[_Element, ...]]] = [(root, viewport, {}, ())]
-    while todo:
-        visit(*todo.pop())
-    if unknown:
-        parts = []
-        for colour, lines in unknown.items():
-            shown = ", ".join(str(x) for x in lines[:8]) + (", ..." if len(lines) > 8 else "")
-            noun = "element" if len(lines) == 1 else "elements"
-            label = "lines" if len(lines) > 1 else "line"
-            parts.append(f"{colour} ({len(lines)} {noun}: {label} {shown})")
-        warnings.append(f"{source_name}: unknown stroke colours (elements skipped): " + ", ".join(parts))
-    if filled:
-        more = f" and {len(filled) - 4} more" if len(filled) > 4 else ""
-        warnings.append(
-            f"{source_name}: {len(filled)} filled shape(s) without a stroke skipped (only strokes are read; to make "
-            f"one the sheet's outline, give it a black stroke): {', '.join(filled[:4])}{more}"
-        )
-    if unresolved:
-        warnings.append(
-            f"{source_name}: <use> elements that name no element of the file are skipped ({_lines(unresolved)})"
-        )
-    if cycles:
-        warnings.append(
-            f"{source_name}: <use> elements that would draw themselves again are skipped ({_lines(cycles)})"
-        )
-    if not curves:
+    reader.read(_Place(viewport, {}))
+    warnings += reader.warnings()
+    if not reader.curves:
         raise PatternError(
             f"{source_name}: no usable crease element (path/line/polyline/polygon/rect/circle/ellipse with a stroke "
             "colour from Origami Simulator's table: black border, red mountain, blue valley, green cut, yellow facet, "
             "magenta undriven)"
         )
-    return SvgDrawing(curves, warnings, width_mm, height_mm, source_name)
+    return SvgDrawing(reader.curves, warnings, width_mm, height_mm, source_name)
 
 
 def read_svg(path: str | Path) -> SvgDrawing:

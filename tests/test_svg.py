@@ -487,6 +487,50 @@ def test_unknown_colour_is_shown_as_written() -> None:
     assert d.warnings == ["w.svg: unknown stroke colours (elements skipped): rgb(0 0 254) (1 element: line 3)"]
 
 
+def test_a_groups_opacity_is_not_a_fold_angle_and_one_line_says_so() -> None:
+    """Inkscape's layer opacity is ``<g opacity="0.6">``: its creases fold by their strokes' own opacity (180° here),
+    as before, but no longer silently. One line names each such group that holds creases, with its line and how
+    many creases it holds; a use's own opacity is a group's too."""
+    d = parse_svg_text(
+        svg(
+            '<g id="creases" opacity="0.6">\n<line stroke="red" x2="1"/><line stroke="#00f" x2="2"/>\n'
+            '<g style="opacity:50%"><line stroke="red" stroke-opacity="0.5" x2="3"/><line stroke="#000" x2="4"/></g>'
+            '</g>\n<g opacity="1"><line stroke="red" x2="5"/></g><g opacity="0.3"><line stroke="#000" x2="6"/></g>\n'
+            '<use href="#creases" opacity=".5"/>',
+            head=XLINK,
+        ),
+        "g.svg",
+    )
+    assert [c.fold_angle for c in d.curves] == [-180, 180, -90, None, -180, None, -180, 180, -90, None]
+    assert d.warnings == [
+        "g.svg: a group's opacity is not read as a fold angle: SVG <g id='creases'> (line 2) has opacity 0.6 around "
+        "3 crease(s); SVG <g> (line 4) has opacity 0.5 around 1 crease(s); SVG <use> (line 6) has opacity 0.5 "
+        "around 3 crease(s); SVG <g id='creases'> (line 2) via <use> (line 6) has opacity 0.6 around 3 crease(s) "
+        "and 1 more; its creases fold by their own strokes' opacity (180° when full): set stroke-opacity (or "
+        "opacity) to the fold angle / 180° (0.6 for 108°) on each stroke"
+    ]
+
+
+def test_a_crease_whose_opacity_gives_0_degrees_is_named() -> None:
+    """Opacity 0 (of the element, its stroke or its colour's alpha) leaves a mountain or valley without an angle:
+    it stays flat unless ``--angle`` gives it one. A tester's file folded nothing ("converged, 0 iterations") and
+    said nothing; one line now names the creases."""
+    d = parse_svg_text(
+        svg(
+            '<path id="zero" d="M 75 0 C 55 50 95 100 75 150" stroke="#0000ff" stroke-opacity="0"/>\n'
+            '<line stroke="red" opacity="0" x2="1"/><line stroke="#f000" x2="1"/><line stroke="red" x2="1"/>\n'
+            '<line stroke="yellow" opacity="0" x2="1"/><line stroke="black" stroke-opacity="0" x2="1"/>'
+        ),
+        "z.svg",
+    )
+    assert [c.fold_angle for c in d.curves] == [None, None, None, -180, 0, None]
+    assert d.warnings == [
+        "z.svg: 3 crease(s) with opacity 0 fold by 0° and stay flat: SVG <path id='zero'> (line 2), SVG <line> "
+        "(line 3), SVG <line> (line 3); set stroke-opacity (or opacity) to the fold angle / 180° (0.6 for 108°), "
+        "or give creases without an angle one with --angle (command line)"
+    ]
+
+
 def test_css_cascade_inheritance_and_precedence() -> None:
     style = (
         "<style>/* creases */ .m { stroke: #ff0000 } #v1, .valley { stroke: blue; stroke-opacity: .5 }"

@@ -117,6 +117,9 @@ SKIPPED_CONTAINERS = {
 }
 """Elements whose contents never draw creases."""
 
+ANGLE_HINT = "set stroke-opacity (or opacity) to the fold angle / 180° (0.6 for 108°)"
+"""How a stroke gets its fold angle, for the warnings about opacities that give none."""
+
 SHAPES = {"path", "line", "polyline", "polygon", "rect", "circle", "ellipse"}
 INHERITED = ("stroke", "stroke-opacity", "fill", "display", "visibility")
 
@@ -1009,6 +1012,20 @@ def _invisible(style: dict[str, str]) -> bool:
     return style.get("visibility", "").strip().lower() in ("hidden", "collapse")
 
 
+def _names(items: list[str], limit: int = 4, sep: str = ", ") -> str:
+    """The first ``limit`` of ``items`` joined, and how many more there are."""
+    return sep.join(items[:limit]) + (f" and {len(items) - limit} more" if len(items) > limit else "")
+
+
+def _group_opacity(own: dict[str, str]) -> float | None:
+    """A container's own ``opacity`` when it is below 1, else None (unreadable values too: it is never used)."""
+    try:
+        opacity = _parse_opacity(own.get("opacity"), "opacity", "")
+    except PatternError:
+        return None
+    return opacity if opacity < 1.0 else None
+
+
 def _describe(elem: _Element) -> str:
     ident = elem.attrib.get("id")
     tag = f"<{elem.tag} id='{ident}'>" if ident else f"<{elem.tag}>"
@@ -1017,12 +1034,14 @@ def _describe(elem: _Element) -> str:
 
 @dataclass(frozen=True)
 class _Place:
-    """How an element is drawn: its user units → mm (y up) matrix, the properties it inherits, and the ``<use>``
-    elements it is drawn through, innermost last (none for the element in its own place)."""
+    """How an element is drawn: its user units → mm (y up) matrix, the properties it inherits, the ``<use>``
+    elements it is drawn through, innermost last (none for the element in its own place), and the groups around it
+    with an opacity of their own (not a fold angle: :meth:`_Reader.warnings` says so)."""
 
     matrix: np.ndarray
     style: dict[str, str]
     via: tuple[_Element, ...] = ()
+    faded: tuple[str, ...] = ()  # the groups around it whose own opacity is below 1 (their descriptions)
 
 
 class _Reader:
@@ -1040,6 +1059,8 @@ class _Reader:
         self.filled: list[str] = []  # shapes without a stroke, filled in a role colour: perhaps meant as the sheet
         self.unresolved: list[int] = []  # lines of <use> elements whose href names no element
         self.cycles: list[int] = []  # lines of <use> elements that would draw themselves again
+        self.flat: list[str] = []  # mountains and valleys whose opacity gives 0°
+        self.group_opacity: dict[str, list[float]] = {}  # group → [its opacity, creases in it]
         self.segment_budget = limits.PATH_SEGMENTS.value
         self.visits_left = limits.SVG_ELEMENTS.value  # elements drawn, clones included: nested <use> cannot multiply
         self.todo: list[tuple[_Element, _Place]] = []
@@ -1089,7 +1110,11 @@ class _Reader:
         if "transform" in elem.attrib:
             value = elem.attrib["transform"]
             matrix = compose(matrix, parse_transform(value, where), where, value)
-        place = _Place(matrix, style, via)
+        faded = place.faded
+        if elem.tag not in SHAPES and (opacity := _group_opacity(own)) is not None:
+            self.group_opacity[where] = [opacity, 0]
+            faded = (*faded, where)
+        place = _Place(matrix, style, via, faded)
         if elem.tag == "use":
             self._use(elem, place, where)
         elif elem.tag in SHAPES:
@@ -1109,7 +1134,7 @@ class _Reader:
             x, y = _attr_float(elem, "x", where), _attr_float(elem, "y", where)
             shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
             matrix = compose(place.matrix, shift, where, f"x={x:g} y={y:g}")
-            self.todo.append((target, _Place(matrix, place.style, (*place.via, elem))))
+            self.todo.append((target, _Place(matrix, place.style, (*place.via, elem), place.faded)))
 
     def _shape(self, elem: _Element, place: _Place, own: dict[str, str], where: str) -> None:
         """A visible shape: crease curves if its stroke has a role colour, else noted for a warning."""
@@ -1137,6 +1162,11 @@ class _Reader:
         opacity = _parse_opacity(own.get("opacity"), "opacity", where)
         stroke_opacity = _parse_opacity(style.get("stroke-opacity"), "stroke-opacity", where)
         angle = _fold_angle(assignment, opacity * stroke_opacity * alpha)
+        if assignment in ("M", "V"):
+            for group in place.faded:
+                self.group_opacity[group][1] += 1
+            if angle is None:
+                self.flat.append(where)
         for k, (raw_segs, closed) in enumerate(subpaths):
             source = where if len(subpaths) == 1 else f"{where} subpath {k + 1}"
             segments = [_to_segment(r, place.matrix) for r in raw_segs]
@@ -1155,10 +1185,20 @@ class _Reader:
                 parts.append(f"{colour} ({len(lines)} {noun}: {label} {shown})")
             out.append(f"{name}: unknown stroke colours (elements skipped): " + ", ".join(parts))
         if self.filled:
-            more = f" and {len(self.filled) - 4} more" if len(self.filled) > 4 else ""
             out.append(
                 f"{name}: {len(self.filled)} filled shape(s) without a stroke skipped (only strokes are read; to make "
-                f"one the sheet's outline, give it a black stroke): {', '.join(self.filled[:4])}{more}"
+                f"one the sheet's outline, give it a black stroke): {_names(self.filled)}"
+            )
+        if self.flat:
+            out.append(
+                f"{name}: {len(self.flat)} crease(s) with opacity 0 fold by 0° and stay flat: {_names(self.flat)}; "
+                f"{ANGLE_HINT}, or give creases without an angle one with --angle (command line)"
+            )
+        held = [f"{g} has opacity {o:g} around {int(n)} crease(s)" for g, (o, n) in self.group_opacity.items() if n]
+        if held:
+            out.append(
+                f"{name}: a group's opacity is not read as a fold angle: {_names(held, sep='; ')}; its creases fold "
+                f"by their own strokes' opacity (180° when full): {ANGLE_HINT} on each stroke"
             )
         if self.unresolved:
             out.append(

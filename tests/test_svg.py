@@ -351,6 +351,59 @@ def test_units_and_viewbox(head: str, scale: float) -> None:
     np.testing.assert_allclose(c.segments[0].points[1] - c.segments[0].points[0], [10 * scale, -20 * scale])
 
 
+def test_lengths_with_absolute_units_on_shapes_are_css_lengths() -> None:
+    """``<rect width="150mm">``, ``x1="0mm"``: CSS absolute units on geometry attributes (a user unit is a px, 1/96
+    in, as for a root without a viewBox). They were refused ("is not a number in user units"). A tester's file of
+    425.19685pt × 15cm without a viewBox: its 150 mm border and the diagonal to (566.929, 566.929) px meet."""
+    d = parse_svg_text(
+        svg(
+            '<rect stroke="#000" width="150mm" height="15cm"/>\n<line stroke="red" x2="566.929" y2="566.929"/>\n'
+            '<line stroke="red" x1="1in" y1="72pt" x2="6pc" y2="40Q"/>\n<circle stroke="red" cx="96PX" r="2.54CM"/>',
+            head='width="425.19685pt" height="15cm"',
+        ),
+        "units.svg",
+    )
+    border, diagonal, mixed, circle = d.curves
+    np.testing.assert_allclose(border.segments[1].points, [[150, 0], [150, -150]], atol=1e-9)
+    np.testing.assert_allclose(diagonal.segments[0].points[1], [150, -150], atol=1e-4)
+    np.testing.assert_allclose(mixed.segments[0].points, [[25.4, -25.4], [25.4, -10]], atol=1e-9)
+    np.testing.assert_allclose([circle.segments[0].arc[0], circle.segments[0].arc[2]], [25.4, 25.4], atol=1e-9)
+    assert d.warnings == []
+
+
+def test_lengths_in_mm_under_a_viewbox_of_another_scale_are_drawn_as_browsers_draw_them_and_said() -> None:
+    """``x1="50mm"`` is 188.98 user units whatever the viewBox; with ``viewBox="0 0 100 100"`` on 100 mm a user
+    unit is 1 mm, so the line lands 189 mm down, off the sheet, as rsvg-convert draws it: one line says why."""
+    d = parse_svg_text(
+        svg('<line id="u" x1="0mm" y1="50mm" x2="100mm" y2="50mm" stroke="#f00"/>\n<line stroke="red" x2="5px"/>'),
+        "unitlen.svg",
+    )
+    np.testing.assert_allclose(d.curves[0].segments[0].points, [[0, -50 / PX_MM], [100 / PX_MM, -50 / PX_MM]])
+    assert d.warnings == [
+        "unitlen.svg: lengths with units on shapes are CSS lengths (96 px, that is 96 user units, to the inch), "
+        "which this file's viewBox or transforms draw at another size, as browsers do: SVG <line id='u'> (line 2) "
+        "(drawn 3.78× the size written); write them without units to mean the file's own units"
+    ]
+
+
+def test_percentages_are_of_the_viewport_and_font_units_are_refused() -> None:
+    """Percentages: x and width of the viewport's width, y and height of its height, r of its diagonal / √2
+    (SVG 1.1 §7.10), in the user units of the viewBox."""
+    (rect, circle) = curves_of(
+        '<rect stroke="#000" x="10%" y="50%" width="50%" height="25%"/><circle stroke="red" cx="0" r="10%"/>',
+        head='viewBox="0 0 200 100" width="200mm" height="100mm"',
+    )
+    np.testing.assert_allclose(rect.segments[0].points, [[20, -50], [120, -50]])
+    np.testing.assert_allclose(rect.segments[1].points, [[120, -50], [120, -75]])
+    assert circle.segments[0].arc[2] == pytest.approx(math.hypot(200, 100) / math.sqrt(2) / 10)
+    with pytest.raises(PatternError, match=r"<line> \(line 2\): attribute x2='50%' is a percentage of the viewport"):
+        parse_svg_text(svg('<line stroke="red" x2="50%"/>', head=""), "p.svg")
+    with pytest.raises(PatternError, match=r"<line id='e'> \(line 2\): attribute x1='2em' is in em, a unit relative"):
+        parse_svg_text(svg('<line id="e" stroke="red" x1="2em"/>'), "e.svg")
+    with pytest.raises(PatternError, match=r"attribute x1='3furlongs' is not a number \(a length in user units"):
+        parse_svg_text(svg('<line stroke="red" x1="3furlongs"/>'), "f.svg")
+
+
 def test_viewbox_origin_and_aspect_ratio_meet() -> None:
     head = 'viewBox="10 10 100 50" width="100mm" height="100mm"'  # meet: scale 1, centred vertically (+25 mm)
     d = parse_svg_text(svg('<line stroke="red" x1="10" y1="10" x2="110" y2="60"/>', head), "u.svg")

@@ -21,7 +21,9 @@ What is read:
 * hidden elements are not read: ``display:none`` (the element and everything in it) and ``visibility`` ``hidden`` or
   ``collapse`` (inherited, so a child that says ``visible`` is read, as SVG draws it);
 * units: ``viewBox`` with ``width``/``height`` in physical units give the user unit → mm scale; otherwise one user
-  unit is one CSS px = 25.4/96 mm. Points are then mapped (x, y) → (x, −y) so the sheet is y-up in mm.
+  unit is one CSS px = 25.4/96 mm. Shape attributes take user units, CSS absolute lengths (96 px = 1 in, before
+  the viewBox scales them) or percentages of the viewport. Points are then mapped (x, y) → (x, −y) so the sheet
+  is y-up in mm.
 
 Each sub-path (or element) becomes one :class:`~.pattern.CreaseCurve` of exact segments: quadratic Béziers are
 degree-elevated to cubics, elliptical arcs stay arcs (an affine image of an ellipse is recomputed exactly).
@@ -355,6 +357,11 @@ def _own_style(elem: _Element, rules: list[_Rule]) -> dict[str, str]:
 # ----------------------------------------------------------------------------------------------------- colours
 
 
+_NUMBER_TEXT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_NUMBER = re.compile(_NUMBER_TEXT)
+_QUANTITY = re.compile(rf"({_NUMBER_TEXT})\s*([A-Za-z%]*)")
+"""A number and its unit (letters or ``%``, maybe none), as CSS writes lengths, percentages and angles."""
+
 _HUE_UNITS = {"": 1.0, "deg": 1.0, "grad": 0.9, "rad": 180.0 / math.pi, "turn": 360.0}
 """Degrees per unit of an ``hsl()`` hue."""
 
@@ -362,7 +369,7 @@ _HUE_UNITS = {"": 1.0, "deg": 1.0, "grad": 0.9, "rad": 180.0 / math.pi, "turn": 
 def _css_number(text: str, full: float, units: dict[str, float] | None = None) -> float | None:
     """A finite CSS number (lower case), a percentage of ``full``, or a number with one of ``units`` (value per
     unit); else None."""
-    m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?)(%|[a-z]*)", text)
+    m = _QUANTITY.fullmatch(text)
     if not m or not math.isfinite(x := float(m.group(1))):
         return None
     unit = m.group(2)
@@ -467,7 +474,6 @@ def _parse_opacity(value: str | None, what: str, where: str) -> float:
 
 
 _TRANSFORM = re.compile(r"\s*(matrix|translate|scale|rotate|skewX|skewY)\s*\(([^)]*)\)\s*,?", re.I)
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 def parse_transform(value: str, where: str = "transform") -> np.ndarray:
@@ -800,17 +806,79 @@ def _to_segment(raw: _Raw, m: np.ndarray) -> CurveSegment:
     return CurveSegment("arc", ends, _transform_arc(m, raw[3]))
 
 
-def _attr_float(elem: _Element, name: str, where: str, default: float | None = 0.0) -> float:
+USER_UNITS = {unit: mm / PX_MM for unit, mm in UNIT_MM.items()}
+"""User units per unit of an absolute length on a shape's attribute: a user unit is a CSS px (1/96 in) whatever
+the viewBox does after (SVG 1.1 §7.10), as :func:`_viewport` takes it for a root without a viewBox."""
+
+RELATIVE_UNITS = ("em", "ex", "ch", "rem", "vw", "vh", "vmin", "vmax")
+"""CSS units relative to a font or a browser window: nothing in a crease pattern gives their size."""
+
+_AXIS = {
+    "x": 0,
+    "x1": 0,
+    "x2": 0,
+    "cx": 0,
+    "width": 0,
+    "rx": 0,
+    "y": 1,
+    "y1": 1,
+    "y2": 1,
+    "cy": 1,
+    "height": 1,
+    "ry": 1,
+}
+"""Which viewport side a percentage of each attribute is of (SVG 1.1 §7.10); others (``r``) take the diagonal."""
+
+
+def _unit_scale(elem: _Element, matrix: np.ndarray) -> float | None:
+    """How many times the size they say an element's lengths in physical units (mm, cm, in, pt, pc, Q) are drawn,
+    when that is not 1: they are CSS lengths of 96 px to the inch, and a viewBox or a transform may make a user
+    unit other than a px (``x1="50mm"`` in a 100 mm sheet with ``viewBox="0 0 100 100"`` lands 189 mm down)."""
+    units = [m.group(2).lower() for n in (*_AXIS, "r") if (m := _QUANTITY.fullmatch(elem.attrib.get(n, "").strip()))]
+    if not any(u in USER_UNITS and u not in ("", "px") for u in units):
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        ratio = math.sqrt(abs(float(np.linalg.det(matrix[:2, :2])))) / PX_MM
+    return ratio if math.isfinite(ratio) and abs(ratio - 1.0) > 0.01 else None
+
+
+def _percent_of(box: tuple[float, float] | None, name: str, where: str, shown: str) -> float:
+    """What 100 % of attribute ``name`` is in a viewport of ``box`` (width, height in user units)."""
+    if box is None:
+        raise PatternError(
+            f"{where}: attribute {name}={shown!r} is a percentage of the viewport, whose size the file does not give "
+            "(give the <svg> a viewBox, or a width and height)"
+        )
+    axis = _AXIS.get(name)
+    return box[axis] if axis is not None else math.hypot(*box) / math.sqrt(2.0)
+
+
+def _attr_float(
+    elem: _Element, name: str, where: str, default: float | None = 0.0, box: tuple[float, float] | None = None
+) -> float:
+    """Attribute ``name`` as a length in user units: a number, an absolute length (px, mm, cm, in, pt, pc, Q) or a
+    percentage of the viewport ``box`` (None: the file gives no size); ``default`` when it is absent."""
     value = elem.attrib.get(name)
     if value is None or value.strip() == "":
         if default is None:
             raise PatternError(f"{where}: missing attribute {name}")
         return default
-    m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)(?:\s*px)?", value.strip())
-    if not m:
-        shown = value if len(value) <= 40 else value[:37] + "..."
-        raise PatternError(f"{where}: attribute {name}={shown!r} is not a number in user units")
-    return float(m.group(1))
+    shown = value if len(value) <= 40 else value[:37] + "..."
+    m = _QUANTITY.fullmatch(value.strip())
+    unit = m.group(2).lower() if m else ""
+    if m and unit in USER_UNITS:
+        return float(m.group(1)) * USER_UNITS[unit]
+    if m and unit == "%":
+        return float(m.group(1)) / 100.0 * _percent_of(box, name, where, shown)
+    if m and unit in RELATIVE_UNITS:
+        raise PatternError(
+            f"{where}: attribute {name}={shown!r} is in {unit}, a unit relative to a font or window that a crease "
+            "pattern does not give: use user units or px, mm, cm, in, pt, pc, Q"
+        )
+    raise PatternError(
+        f"{where}: attribute {name}={shown!r} is not a number (a length in user units, or with px, mm, cm, in, pt, "
+        "pc, Q or %)"
+    )
 
 
 def _points_attr(elem: _Element, where: str) -> np.ndarray:
@@ -833,14 +901,21 @@ def _ellipse_arcs(cx: float, cy: float, rx: float, ry: float) -> list[_Raw]:
     ]
 
 
-def _shape_subpaths(elem: _Element, where: str, budget: int | None = None) -> list[tuple[list[_Raw], bool]]:
-    """Raw sub-paths (user units) of one shape element (a path of more than ``budget`` commands raises)."""
+def _shape_subpaths(
+    elem: _Element, where: str, budget: int | None = None, box: tuple[float, float] | None = None
+) -> list[tuple[list[_Raw], bool]]:
+    """Raw sub-paths (user units) of one shape element (a path of more than ``budget`` commands raises; ``box``:
+    the viewport's size in user units, for percentages)."""
     tag = elem.tag
+
+    def attr(name: str) -> float:
+        return _attr_float(elem, name, where, box=box)
+
     if tag == "path":
         return parse_path_data(elem.attrib.get("d", ""), where, budget)
     if tag == "line":
-        p0 = np.array([_attr_float(elem, "x1", where), _attr_float(elem, "y1", where)])
-        p1 = np.array([_attr_float(elem, "x2", where), _attr_float(elem, "y2", where)])
+        p0 = np.array([attr("x1"), attr("y1")])
+        p1 = np.array([attr("x2"), attr("y2")])
         return [([("line", p0, p1)], False)]
     if tag in ("polyline", "polygon"):
         pts = _points_attr(elem, where)
@@ -852,13 +927,13 @@ def _shape_subpaths(elem: _Element, where: str, budget: int | None = None) -> li
             segs.append(("line", pts[-1], pts[0]))
         return [(segs, closed)] if segs else []
     if tag == "rect":
-        x, y = _attr_float(elem, "x", where), _attr_float(elem, "y", where)
-        w, h = _attr_float(elem, "width", where), _attr_float(elem, "height", where)
+        x, y = attr("x"), attr("y")
+        w, h = attr("width"), attr("height")
         if w <= 0 or h <= 0:
             return []
         rx_s, ry_s = elem.attrib.get("rx"), elem.attrib.get("ry")
-        rx = _attr_float(elem, "rx", where) if rx_s not in (None, "", "auto") else None
-        ry = _attr_float(elem, "ry", where) if ry_s not in (None, "", "auto") else None
+        rx = attr("rx") if rx_s not in (None, "", "auto") else None
+        ry = attr("ry") if ry_s not in (None, "", "auto") else None
         if rx is None and ry is None:
             rx = ry = 0.0
         elif rx is None:
@@ -896,15 +971,15 @@ def _shape_subpaths(elem: _Element, where: str, budget: int | None = None) -> li
         segs.append(("arc", pts["l1"], pts["t0"], (x + rx, y + ry, rx, ry, 0.0, math.pi, hp)))
         return [(segs, True)]
     if tag == "circle":
-        r = _attr_float(elem, "r", where)
+        r = attr("r")
         if r <= 0:
             return []
-        return [(_ellipse_arcs(_attr_float(elem, "cx", where), _attr_float(elem, "cy", where), r, r), True)]
+        return [(_ellipse_arcs(attr("cx"), attr("cy"), r, r), True)]
     if tag == "ellipse":
-        rx, ry = _attr_float(elem, "rx", where), _attr_float(elem, "ry", where)
+        rx, ry = attr("rx"), attr("ry")
         if rx <= 0 or ry <= 0:
             return []
-        return [(_ellipse_arcs(_attr_float(elem, "cx", where), _attr_float(elem, "cy", where), rx, ry), True)]
+        return [(_ellipse_arcs(attr("cx"), attr("cy"), rx, ry), True)]
     return []
 
 
@@ -915,7 +990,7 @@ def _length_mm(value: str | None) -> tuple[float | None, bool]:
     """(millimetres, has a physical unit) for a width/height value; (None, False) if absent or a percentage."""
     if value is None:
         return None, False
-    m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z%]*)", value.strip())
+    m = _QUANTITY.fullmatch(value.strip())
     if not m:
         return None, False
     unit = m.group(2).lower()
@@ -924,47 +999,62 @@ def _length_mm(value: str | None) -> tuple[float | None, bool]:
     return float(m.group(1)) * UNIT_MM[unit], unit not in ("", "px")
 
 
-def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float]:
-    """User units → mm (y up) as a 3×3 matrix, and the viewport's width and height in mm.
+def _viewbox(elem: _Element, where: str) -> tuple[float, float, float, float] | None:
+    """An element's ``viewBox`` (x, y, width, height), None without one; refused unless the size is positive."""
+    vb = elem.attrib.get("viewBox")
+    if vb is None or not vb.strip():
+        return None
+    nums = [float(x) for x in _NUMBER.findall(vb)]
+    if len(nums) != 4 or not (nums[2] > 0 and nums[3] > 0) or not all(map(math.isfinite, nums)):
+        raise PatternError(f"{where}: viewBox {vb!r} must be four numbers with positive width and height")
+    return nums[0], nums[1], nums[2], nums[3]
 
-    With a ``viewBox`` the user box is fitted into ``width × height`` following ``preserveAspectRatio`` (default
-    ``xMidYMid meet``; ``none`` scales each axis on its own). Missing ``width``/``height`` fall back to the viewBox
-    size in px. The result ends with the flip (x, y) → (x, −y).
+
+def _fit(vbox: tuple[float, float, float, float], par: str | None, width: float, height: float) -> np.ndarray:
+    """3×3 matrix that fits the user box ``vbox`` into a ``width × height`` viewport at the origin, following
+    ``preserveAspectRatio`` ``par`` (SVG 1.1 §7.8; default ``xMidYMid meet``, ``none`` scales each axis on its own)."""
+    vx, vy, vw, vh = vbox
+    sx, sy = width / vw, height / vh
+    words = (par or "").split()
+    if words[:1] == ["defer"]:  # only meaningful on <image>
+        words = words[1:]
+    align = words[0] if words else "xMidYMid"
+    tx = ty = 0.0
+    if align != "none":
+        s = max(sx, sy) if words[1:2] == ["slice"] else min(sx, sy)
+        fx = {"xMin": 0.0, "xMid": 0.5, "xMax": 1.0}.get(align[:4], 0.5)
+        fy = {"YMin": 0.0, "YMid": 0.5, "YMax": 1.0}.get(align[4:], 0.5)
+        tx, ty = fx * (width - vw * s), fy * (height - vh * s)
+        sx = sy = s
+    return np.array([[sx, 0.0, tx - vx * sx], [0.0, sy, ty - vy * sy], [0.0, 0.0, 1.0]])
+
+
+def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float, tuple[float, float] | None]:
+    """User units → mm (y up) as a 3×3 matrix, the viewport's width and height in mm, and its size in user units
+    (what percentages are of; None when the file gives no size).
+
+    With a ``viewBox`` the user box is fitted into ``width × height`` (:func:`_fit`). Missing ``width``/``height``
+    fall back to the viewBox size in px. Without one, a user unit is a px. The result ends with the flip
+    (x, y) → (x, −y).
     """
     w_mm, _ = _length_mm(root.attrib.get("width"))
     h_mm, _ = _length_mm(root.attrib.get("height"))
-    vb = root.attrib.get("viewBox")
-    m = np.eye(3)
-    if vb is not None and vb.strip():
-        nums = [float(x) for x in _NUMBER.findall(vb)]
-        if len(nums) != 4 or nums[2] <= 0 or nums[3] <= 0:
-            raise PatternError(f"{where}: viewBox {vb!r} must be four numbers with positive width and height")
-        vx, vy, vw, vh = nums
+    vbox = _viewbox(root, where)
+    if vbox is not None:
+        vw, vh = vbox[2], vbox[3]
         if w_mm is None and h_mm is None:
             w_mm, h_mm = vw * PX_MM, vh * PX_MM
         elif w_mm is None:
             w_mm = h_mm * vw / vh
         elif h_mm is None:
             h_mm = w_mm * vh / vw
-        sx, sy = w_mm / vw, h_mm / vh
-        par = root.attrib.get("preserveAspectRatio", "xMidYMid meet").split()
-        align = par[0] if par else "xMidYMid"
-        tx = ty = 0.0
-        if align != "none":
-            slice_ = len(par) > 1 and par[1] == "slice"
-            s = max(sx, sy) if slice_ else min(sx, sy)
-            fx = {"xMin": 0.0, "xMid": 0.5, "xMax": 1.0}.get(align[:4], 0.5)
-            fy = {"YMin": 0.0, "YMid": 0.5, "YMax": 1.0}.get(align[4:], 0.5)
-            tx, ty = fx * (w_mm - vw * s), fy * (h_mm - vh * s)
-            sx = sy = s
-        m = np.array([[sx, 0.0, tx - vx * sx], [0.0, sy, ty - vy * sy], [0.0, 0.0, 1.0]])
+        m = _fit(vbox, root.attrib.get("preserveAspectRatio"), w_mm, h_mm)
+        box: tuple[float, float] | None = (vw, vh)
     else:
         m = np.diag([PX_MM, PX_MM, 1.0])
-        if w_mm is None or h_mm is None:
-            w_mm = w_mm or 0.0
-            h_mm = h_mm or 0.0
+        box = (w_mm / PX_MM, h_mm / PX_MM) if w_mm is not None and h_mm is not None else None
     flip = np.diag([1.0, -1.0, 1.0])
-    return flip @ m, float(w_mm or 0.0), float(h_mm or 0.0)
+    return flip @ m, float(w_mm or 0.0), float(h_mm or 0.0), box
 
 
 # ----------------------------------------------------------------------------------------------------- reading
@@ -1035,13 +1125,15 @@ def _describe(elem: _Element) -> str:
 @dataclass(frozen=True)
 class _Place:
     """How an element is drawn: its user units → mm (y up) matrix, the properties it inherits, the ``<use>``
-    elements it is drawn through, innermost last (none for the element in its own place), and the groups around it
-    with an opacity of their own (not a fold angle: :meth:`_Reader.warnings` says so)."""
+    elements it is drawn through, innermost last (none for the element in its own place), the groups around it
+    with an opacity of their own (not a fold angle: :meth:`_Reader.warnings` says so) and the size of its viewport
+    (for percentages)."""
 
     matrix: np.ndarray
     style: dict[str, str]
     via: tuple[_Element, ...] = ()
     faded: tuple[str, ...] = ()  # the groups around it whose own opacity is below 1 (their descriptions)
+    box: tuple[float, float] | None = None  # its viewport's width and height in its user units (None: not given)
 
 
 class _Reader:
@@ -1059,6 +1151,7 @@ class _Reader:
         self.filled: list[str] = []  # shapes without a stroke, filled in a role colour: perhaps meant as the sheet
         self.unresolved: list[int] = []  # lines of <use> elements whose href names no element
         self.cycles: list[int] = []  # lines of <use> elements that would draw themselves again
+        self.rescaled: list[str] = []  # shapes whose lengths in mm, in, ... are drawn at another size than they say
         self.flat: list[str] = []  # mountains and valleys whose opacity gives 0°
         self.group_opacity: dict[str, list[float]] = {}  # group → [its opacity, creases in it]
         self.segment_budget = limits.PATH_SEGMENTS.value
@@ -1114,7 +1207,7 @@ class _Reader:
         if elem.tag not in SHAPES and (opacity := _group_opacity(own)) is not None:
             self.group_opacity[where] = [opacity, 0]
             faded = (*faded, where)
-        place = _Place(matrix, style, via, faded)
+        place = _Place(matrix, style, via, faded, place.box)
         if elem.tag == "use":
             self._use(elem, place, where)
         elif elem.tag in SHAPES:
@@ -1131,10 +1224,10 @@ class _Reader:
         elif any(target is a for u in (elem, *place.via) for a in _self_and_ancestors(u, self.parents)):
             self.cycles.append(elem.line)
         else:
-            x, y = _attr_float(elem, "x", where), _attr_float(elem, "y", where)
+            x, y = _attr_float(elem, "x", where, box=place.box), _attr_float(elem, "y", where, box=place.box)
             shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
             matrix = compose(place.matrix, shift, where, f"x={x:g} y={y:g}")
-            self.todo.append((target, _Place(matrix, place.style, (*place.via, elem), place.faded)))
+            self.todo.append((target, _Place(matrix, place.style, (*place.via, elem), place.faded, place.box)))
 
     def _shape(self, elem: _Element, place: _Place, own: dict[str, str], where: str) -> None:
         """A visible shape: crease curves if its stroke has a role colour, else noted for a warning."""
@@ -1143,7 +1236,10 @@ class _Reader:
             return
         stroke = style.get("stroke")
         role = stroke_role(stroke)
-        subpaths = _shape_subpaths(elem, where, self.segment_budget)
+        subpaths = _shape_subpaths(elem, where, self.segment_budget, place.box)
+        ratio = _unit_scale(elem, place.matrix)
+        if ratio is not None:
+            self.rescaled.append(f"{where} (drawn {ratio:.3g}× the size written)")
         self.segment_budget -= sum(len(segs) for segs, _ in subpaths)
         if self.segment_budget < 0:
             limits.PATH_SEGMENTS.check(
@@ -1189,6 +1285,12 @@ class _Reader:
                 f"{name}: {len(self.filled)} filled shape(s) without a stroke skipped (only strokes are read; to make "
                 f"one the sheet's outline, give it a black stroke): {_names(self.filled)}"
             )
+        if self.rescaled:
+            out.append(
+                f"{name}: lengths with units on shapes are CSS lengths (96 px, that is 96 user units, to the inch), "
+                f"which this file's viewBox or transforms draw at another size, as browsers do: {_names(self.rescaled)}"
+                "; write them without units to mean the file's own units"
+            )
         if self.flat:
             out.append(
                 f"{name}: {len(self.flat)} crease(s) with opacity 0 fold by 0° and stay flat: {_names(self.flat)}; "
@@ -1216,8 +1318,8 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
         raise PatternError(f"{source_name}: not an SVG file (root element is <{root.tag}>, line {root.line})")
     warnings: list[str] = []
     reader = _Reader(root, source_name, warnings)
-    viewport, width_mm, height_mm = _viewport(root, source_name)
-    reader.read(_Place(viewport, {}))
+    viewport, width_mm, height_mm, box = _viewport(root, source_name)
+    reader.read(_Place(viewport, {}, box=box))
     warnings += reader.warnings()
     if not reader.curves:
         raise PatternError(

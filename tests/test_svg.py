@@ -748,6 +748,63 @@ def test_use_draws_the_element_it_names_moved_by_its_transform_and_x_y() -> None
     assert curves[2].source == "SVG <line id='l'> (line 2) via <use> (line 4)"
 
 
+def test_a_nested_svg_is_a_viewport_of_its_own() -> None:
+    """``<svg x y width height viewBox>`` inside the drawing places and scales its content (SVG 1.1 §7.9): a tester's
+    line at y = 2.5 of ``viewBox="0 0 10 5"`` in the lower half (y 50–100) belongs at y = 75, not 2.5."""
+    (_, line) = curves_of(
+        '<rect width="100" height="100" fill="none" stroke="#000"/>\n'
+        '<svg x="0" y="50" width="100" height="50" viewBox="0 0 10 5">\n'
+        '<line id="nested" x1="0" y1="2.5" x2="10" y2="2.5" stroke="#00f" stroke-opacity="0.5"/></svg>'
+    )
+    np.testing.assert_allclose(line.segments[0].points, user([[0, 75], [100, 75]]), atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "par,ends",
+    [
+        ("", [[25, 20], [55, 50]]),  # xMidYMid meet: scale 3, centred in x
+        ('preserveAspectRatio="xMinYMax slice"', [[10, -10], [70, 50]]),  # scale 6, bottom-aligned
+        ('preserveAspectRatio="none"', [[10, 20], [70, 50]]),  # 6 × 3
+        ('preserveAspectRatio="xMaxYMin"', [[40, 20], [70, 50]]),
+    ],
+)
+def test_a_nested_viewport_follows_preserve_aspect_ratio(par: str, ends: list[list[float]]) -> None:
+    """A 10 × 10 viewBox in a 60 × 30 viewport at (10, 20): the ends agree with rsvg-convert's rendering."""
+    viewport = f'<svg x="10" y="20" width="60" height="30" viewBox="0 0 10 10" {par}>'
+    (c,) = curves_of(viewport + '<line stroke="red" x2="10" y2="10"/></svg>')
+    np.testing.assert_allclose(c.segments[0].points, user(ends), atol=1e-12)
+
+
+def test_a_symbol_is_fitted_into_the_size_its_use_gives() -> None:
+    """``<symbol viewBox>`` drawn by ``<use width height>`` is scaled into that size (a tester's 10 × 10 pleat on a
+    100 × 100 sheet was drawn a tenth of its size in the corner); without a size the use fills 100 % of the
+    viewport; a use's width/height also size an ``<svg>`` it draws, and a size of 0 draws nothing."""
+    curves = parse_svg_text(
+        svg(
+            '<defs><symbol id="pleat" viewBox="0 0 10 10"><path d="M 5 0 C 3 3 7 7 5 10" stroke="#00f"/></symbol>\n'
+            '<symbol id="wide" viewBox="0 0 20 10" preserveAspectRatio="xMaxYMid meet"><line stroke="red" x2="20" '
+            'y2="10"/></symbol><svg id="box" width="10" height="10" viewBox="0 0 1 1"><line stroke="red" x2="1"/>'
+            "</svg></defs>\n"
+            '<use xlink:href="#pleat" x="0" y="0" width="100" height="100"/>\n'
+            '<use href="#wide" x="5" y="5" width="80" height="80"/><use href="#pleat"/>\n'
+            '<use href="#box" width="40" height="40"/><use href="#pleat" width="0"/>',
+            head=XLINK,
+        ),
+        "symbols.svg",
+    ).curves
+    assert len(curves) == 4
+    np.testing.assert_allclose(curves[0].segments[0].points, user([[50, 0], [30, 30], [70, 70], [50, 100]]))
+    np.testing.assert_allclose(curves[1].segments[0].points, user([[5, 25], [85, 65]]))  # 4×, centred vertically
+    np.testing.assert_allclose(curves[2].segments[0].points, curves[0].segments[0].points)  # 100 % of the sheet
+    np.testing.assert_allclose(curves[3].segments[0].points, user([[0, 0], [40, 0]]))
+    assert curves[0].source == "SVG <path> (line 2) via <use> (line 4)"
+
+
+def test_a_nested_viewport_without_a_size_is_refused_when_its_viewbox_needs_one() -> None:
+    with pytest.raises(PatternError, match=r"SVG <svg id='n'> \(line 2\): its viewBox needs the size of its viewport"):
+        parse_svg_text(svg('<svg id="n" viewBox="0 0 1 1"><line stroke="red" x2="1"/></svg>', head=""), "n.svg")
+
+
 def test_use_that_names_nothing_or_itself_is_skipped_with_a_warning() -> None:
     drawing = parse_svg_text(
         svg(

@@ -9,6 +9,9 @@ What is read:
   reflection, several sub-paths), ``line``, ``polyline``, ``polygon``, ``rect`` (rounded corners become arcs),
   ``circle`` and ``ellipse``; contents of ``defs``/``symbol``/``clipPath``/``mask``/``metadata``/... are skipped;
 * nested ``transform`` lists (``matrix translate scale rotate skewX skewY``), applied innermost first;
+* viewports: a nested ``<svg>`` (``x y width height viewBox preserveAspectRatio``, sizes 100 % by default) and a
+  ``<symbol viewBox>`` drawn by a ``<use width height>`` place and scale their content as the root's viewBox does
+  (nothing is clipped to them);
 * clones: ``<use href="#id">`` (or ``xlink:href``) draws the element it names (a ``<symbol>`` too) moved by its
   ``transform`` then ``x``/``y``, inheriting the use's stroke; a use that names nothing or would draw itself again
   is skipped with a warning, and the copies count against the element limit (nested uses cannot multiply them);
@@ -1029,6 +1032,38 @@ def _fit(vbox: tuple[float, float, float, float], par: str | None, width: float,
     return np.array([[sx, 0.0, tx - vx * sx], [0.0, sy, ty - vy * sy], [0.0, 0.0, 1.0]])
 
 
+def _nested_viewport(
+    elem: _Element, use: _Element | None, box: tuple[float, float] | None, where: str
+) -> tuple[np.ndarray, tuple[float, float] | None] | None:
+    """The viewport of a nested ``<svg>`` or of a ``<symbol>`` (or ``<svg>``) drawn by ``use`` (SVG 1.1 §7.9, §5.6):
+    the matrix from its user units to its parent's, and its viewport's size in its own user units (None: unknown).
+
+    ``x``/``y`` place it; ``width``/``height`` (the use's, where it gives them; default 100 % of the parent's
+    viewport ``box``) size it; its ``viewBox`` is fitted in as the root's is (:func:`_fit`). None when the viewport
+    is empty (a width or height of 0 draws nothing). Clipping to the viewport is not done."""
+    sizes: list[float | None] = []
+    for name in ("width", "height"):
+        source = use if use is not None and use.attrib.get(name, "").strip() not in ("", "auto") else elem
+        if source.attrib.get(name, "").strip() in ("", "auto"):
+            sizes.append(None if box is None else box[_AXIS[name]])
+        else:
+            sizes.append(_attr_float(source, name, where if source is elem else _describe(source), box=box))
+    width, height = sizes
+    if (width is not None and width <= 0) or (height is not None and height <= 0):
+        return None
+    x, y = _attr_float(elem, "x", where, box=box), _attr_float(elem, "y", where, box=box)
+    shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
+    vbox = _viewbox(elem, where)
+    if vbox is None:
+        return shift, (width, height) if width is not None and height is not None else None
+    if width is None or height is None:
+        raise PatternError(
+            f"{where}: its viewBox needs the size of its viewport, which the file does not give: give it (or the <use> "
+            "that draws it) a width and height"
+        )
+    return shift @ _fit(vbox, elem.attrib.get("preserveAspectRatio"), width, height), (vbox[2], vbox[3])
+
+
 def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float, tuple[float, float] | None]:
     """User units → mm (y up) as a 3×3 matrix, the viewport's width and height in mm, and its size in user units
     (what percentages are of; None when the file gives no size).
@@ -1203,11 +1238,16 @@ class _Reader:
         if "transform" in elem.attrib:
             value = elem.attrib["transform"]
             matrix = compose(matrix, parse_transform(value, where), where, value)
-        faded = place.faded
+        faded, box = place.faded, place.box
         if elem.tag not in SHAPES and (opacity := _group_opacity(own)) is not None:
             self.group_opacity[where] = [opacity, 0]
             faded = (*faded, where)
-        place = _Place(matrix, style, via, faded, place.box)
+        if elem.tag in ("svg", "symbol") and elem is not self.root:  # a viewport of its own
+            nested = _nested_viewport(elem, via[-1] if used else None, box, where)
+            if nested is None:
+                return
+            matrix, box = compose(matrix, nested[0], where, "its viewport"), nested[1]
+        place = _Place(matrix, style, via, faded, box)
         if elem.tag == "use":
             self._use(elem, place, where)
         elif elem.tag in SHAPES:

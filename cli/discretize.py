@@ -28,6 +28,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--interval", type=float, default=None, help="maximum chord / border piece length, mm")
     p.add_argument("--tolerance", type=float, default=None, help="maximum curve-to-chord distance, mm")
     p.add_argument("--merge", type=float, default=None, help="merge vertices closer than this, mm")
+    p.add_argument(
+        "--collection",
+        default=None,
+        help="of a .blend input: discretise this collection's crease curves (default: its scene's)",
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors (no summary, no progress)")
     p.set_defaults(func=run)
 
@@ -53,9 +58,9 @@ def run(args: argparse.Namespace) -> int:
     is_fold = path.suffix.lower() == ".fold"
     with Progress(quiet=args.quiet).stage(f"{path.name}"):
         if is_fold:
-            pattern = read_pattern(path)
+            pattern = read_pattern(path, collection=args.collection)
         else:
-            curves, warnings = read_curves(path)
+            curves, warnings = read_curves(path, collection=args.collection)
             pattern = discretize(curves, interval=args.interval, tolerance=args.tolerance, merge_tolerance=args.merge)
             pattern.warnings = warnings + pattern.warnings
     ms = (time.perf_counter() - t0) * 1e3

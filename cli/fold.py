@@ -30,6 +30,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mesh", default="ruling", choices=("ruling", "cdt", "earcut"), help="triangulation")
     p.add_argument("--solver", default="fast", choices=("fast", "faithful", "isometric"), help="solver method")
     p.add_argument("--report", default=None, help="write the report as JSON here")
+    p.add_argument(
+        "--collection",
+        default=None,
+        help="of a .blend input: fold this collection's crease curves (default: its scene's)",
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors (no summary, no progress)")
     p.add_argument(
         "--constraints",
@@ -135,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
     check_outputs(args.input, {"--out": out, "--report": args.report})
     progress = Progress(quiet=args.quiet)
     with progress.stage(Path(args.input).name):
-        pattern = read_pattern(args.input, interval=args.interval, tolerance=args.tolerance)
+        pattern = read_pattern(args.input, interval=args.interval, tolerance=args.tolerance, collection=args.collection)
         held = read_constraints(args.input, args.constraints)
     with progress.stage(f"folding {pattern.n_edges:,} segments"):
         fold = fold_pattern(

@@ -95,9 +95,40 @@ def _segment(p: np.ndarray) -> CurveSegment | None:
     return seg
 
 
+def world_matrix(ob: bpy.types.Object) -> np.ndarray:
+    """``ob``'s world matrix (4×4): Blender's ``matrix_world``, except for an object linked from a library file
+    into no scene of this file (:func:`read_blend_file`), which Blender never evaluates (its ``matrix_world`` is the
+    identity): there it is composed as Blender does, parent's world × parent inverse × own transform (location,
+    rotation, scale and their deltas); constraints are left out."""
+    if ob.library is None or any(scene.library is None for scene in ob.users_scene):
+        return np.array(ob.matrix_world, dtype=np.float64)
+    m = np.array(ob.matrix_basis, dtype=np.float64)
+    if ob.parent is not None:
+        m = world_matrix(ob.parent) @ np.array(ob.matrix_parent_inverse, dtype=np.float64) @ m
+    return m
+
+
 def _world(ob: bpy.types.Object, local: np.ndarray) -> np.ndarray:
-    m = np.array(ob.matrix_world, dtype=np.float64)
+    m = world_matrix(ob)
     return local @ m[:3, :3].T + m[:3, 3]
+
+
+def _warn_unread_shape(ob: bpy.types.Object, notes: list[str]) -> None:
+    """Warn when the viewport draws ``ob`` other than its splines: modifiers (Mirror, Array, Hook …) and shape keys
+    change what is shown, while the creases are the splines as drawn (an evaluated curve is a mesh, without the
+    exact segments the ruling-aware meshing needs)."""
+    shown = [m.name for m in ob.modifiers if m.show_viewport]
+    if shown:
+        notes.append(
+            f"curve '{ob.name}': its modifier(s) {', '.join(repr(n) for n in shown[:4])} are not folded — the "
+            "creases are its splines as drawn (draw the copies as splines, or disable the modifiers)"
+        )
+    keys = ob.data.shape_keys
+    if keys is not None and any(k.value != 0.0 and not k.mute for k in keys.key_blocks[1:]):
+        notes.append(
+            f"curve '{ob.name}': its shape keys are not folded — the creases are the splines as drawn, without "
+            "the keys (set the key values to 0, or make the shape the drawn one)"
+        )
 
 
 def _spline_points(ob: bpy.types.Object, spline: bpy.types.Spline, where: str) -> tuple[str, list[np.ndarray]]:
@@ -169,13 +200,14 @@ def curves_steps(
             continue
         assignment = ROLE_ASSIGNMENT[role]
         angle = _signed_angle(role, magnitude)
+        _warn_unread_shape(ob, notes)
         stored = exact_curves.read_description(ob.data)
         if stored is not None and stored.role == role and stored.angle is not None and role in ("MOUNTAIN", "VALLEY"):
             if np.float32(math.radians(abs(stored.angle))) == np.float32(ob.curved_fold.fold_angle):
                 angle = float(stored.angle)  # the file's angle in double precision (the property is float32)
         transform = None
         if stored is not None:
-            transform = exact_curves.similarity(np.array(ob.matrix_world), stored.unit_scale, scale)
+            transform = exact_curves.similarity(world_matrix(ob), stored.unit_scale, scale)
         for k, spline in enumerate(ob.data.splines):
             if 1e3 * (time.perf_counter() - last) >= unit_ms:
                 yield
@@ -238,7 +270,7 @@ def stored_pattern(objects: Iterable[bpy.types.Object], *, unit_scale: float | N
         return None
     if len({ob.data.name for ob in objects}) != len(objects):
         return None
-    matrix = np.array(objects[0].matrix_world, dtype=np.float64)
+    matrix = world_matrix(objects[0])
     transform = None
     for ob in objects:
         desc = exact_curves.read_description(ob.data)
@@ -248,7 +280,7 @@ def stored_pattern(objects: Iterable[bpy.types.Object], *, unit_scale: float | N
         if desc.angle is not None and role in ("MOUNTAIN", "VALLEY"):
             if np.float32(math.radians(abs(desc.angle))) != np.float32(ob.curved_fold.fold_angle):
                 return None
-        if not np.array_equal(np.array(ob.matrix_world, dtype=np.float64), matrix):
+        if not np.array_equal(world_matrix(ob), matrix):
             return None
         transform = exact_curves.similarity(matrix, desc.unit_scale, scale)
         if transform is None or len(ob.data.splines) != len(desc.splines):
@@ -305,40 +337,144 @@ def _check_plane(collected: list[tuple[CreaseCurve, np.ndarray]], scale: float) 
             )
 
 
-def read_blend_file(path: str | Path, *, unit_scale: float | None = None) -> list[CreaseCurve]:
-    """Crease curves of every curve object with a role in the ``.blend`` file ``path``.
+def read_blend_file(
+    path: str | Path, *, unit_scale: float | None = None, collection: str | None = None
+) -> tuple[list[CreaseCurve], list[str]]:
+    """Crease curves of a ``.blend`` file on disk, and the warnings met reading them: the role-carrying curves of
+    ``collection`` (and the collections in it), or else of the file's (first) scene — not those in collections
+    excluded from its view layer, nor curves in no scene.
 
     The file's objects are *linked* (``bpy.data.libraries.load(link=True)``) and the library is removed again
-    afterwards, so the file open in Blender is left as it was. The crease-role property group is registered for the
-    duration if the add-on is not enabled (the command line). ``unit_scale`` defaults to the file's first scene.
+    afterwards, so the file open in Blender is left as it was. Linked objects are in no scene here, so their world
+    matrices are composed from their transforms and parents (:func:`world_matrix`), as Blender shows them. The
+    crease-role property group is registered for the duration if the add-on is not enabled (the command line).
+    ``unit_scale`` defaults to the file's first scene.
     """
     path = Path(path)
     if not path.is_file():
         raise PatternError(f"{path}: no such file")
     registered_here = _ensure_properties()
     before_libraries = set(bpy.data.libraries)
+    warnings: list[str] = []
     try:
         try:
             with bpy.data.libraries.load(str(path), link=True) as (data_from, data_to):
                 data_to.objects = list(data_from.objects)
+                data_to.collections = list(data_from.collections)
                 data_to.scenes = list(data_from.scenes[:1])
         except OSError as exc:
             raise PatternError(f"{path}: cannot read as a .blend file ({exc})") from exc
+        scenes = [s for s in data_to.scenes if s is not None]
         scale = unit_scale
         if scale is None:
-            scenes = [s for s in data_to.scenes if s is not None]
             scale = default_unit_scale(scenes[0]) if scenes else default_unit_scale()
-        objects = [ob for ob in data_to.objects if ob is not None and ob.type == "CURVE"]
+        objects = _blend_objects(path, data_to, scenes[0] if scenes else None, collection, warnings)
+        if not objects:
+            where = f"collection '{collection}'" if collection is not None else "the file's scene"
+            raise PatternError(f"{path.name}: no crease curves (curve objects with a crease role) in {where}")
         try:
-            curves = curves_from_objects(objects, unit_scale=scale)
+            curves = curves_from_objects(objects, unit_scale=scale, warnings=warnings)
         except PatternError as exc:
             raise PatternError(f"{path}: {exc}") from exc
-        return curves
+        return curves, warnings
     finally:
         for lib in set(bpy.data.libraries) - before_libraries:
             bpy.data.libraries.remove(lib)
         if registered_here:
             _release_properties()
+
+
+def _blend_objects(path: Path, data, scene, collection: str | None, warnings: list[str]) -> list[bpy.types.Object]:
+    """The curve objects of a linked .blend file (``data``: what was linked) that :func:`read_blend_file` reads:
+    those of ``collection``, or of ``scene`` less the view layer's excluded collections; warnings name what is
+    left out, objects whose placement the file does not hold (constraints, non-object parents), and a file whose
+    borders lie in several collections (several patterns folded as one sheet)."""
+    curves = [ob for ob in data.objects if ob is not None and ob.type == "CURVE" and _role_and_angle(ob)[0] != "NONE"]
+    if collection is not None:
+        chosen = next((c for c in data.collections if c is not None and c.name == collection), None)
+        if chosen is None:
+            names = sorted(c.name for c in data.collections if c is not None)
+            shown = ", ".join(f"'{n}'" for n in names[:10]) + (", ..." if len(names) > 10 else "")
+            raise PatternError(f"{path.name}: no collection named '{collection}' (the file has {shown or 'none'})")
+        members = {ob.name for ob in chosen.all_objects}
+        kept = [ob for ob in curves if ob.name in members]
+    elif scene is not None:
+        excluded = _excluded_collections(scene)
+        visible = {ob.name for c in _visible_collections(scene, excluded) for ob in c.objects}
+        visible |= {ob.name for ob in scene.collection.objects}
+        kept = [ob for ob in curves if ob.name in visible]
+        left = [ob.name for ob in curves if ob.name not in visible]
+        if left:
+            where = (
+                f" (in {', '.join(repr(c.name) for c in excluded)}, excluded from the view layer)" if excluded else ""
+            )
+            warnings.append(
+                f"{len(left)} crease curve(s) not in scene '{scene.name}' left out{where}: "
+                + ", ".join(f"'{n}'" for n in left[:10])
+                + (", ..." if len(left) > 10 else "")
+                + "; pass --collection to fold another collection"
+            )
+    else:
+        kept = curves
+    for ob in kept:
+        _warn_placement(ob, warnings)
+    if collection is None:
+        holders = sorted({c.name for ob in kept if _role_and_angle(ob)[0] == "BORDER" for c in ob.users_collection})
+        if len(holders) > 1:
+            warnings.append(
+                f"border curves lie in {len(holders)} collections ("
+                + ", ".join(f"'{n}'" for n in holders[:6])
+                + "), folded together as one sheet; pass --collection NAME to fold one pattern"
+            )
+    return kept
+
+
+def _excluded_collections(scene) -> list[bpy.types.Collection]:
+    """Collections excluded (the checkbox) from ``scene``'s first view layer."""
+    out: list[bpy.types.Collection] = []
+    if not scene.view_layers:
+        return out
+    stack = list(scene.view_layers[0].layer_collection.children)
+    while stack:
+        lc = stack.pop()
+        if lc.exclude:
+            out.append(lc.collection)
+        else:
+            stack.extend(lc.children)
+    return out
+
+
+def _visible_collections(scene, excluded: list[bpy.types.Collection]) -> list[bpy.types.Collection]:
+    """The collections of ``scene`` not excluded from its first view layer (nor inside an excluded one)."""
+    skip = {c.name for c in excluded}
+    out: list[bpy.types.Collection] = []
+    stack = list(scene.collection.children)
+    while stack:
+        c = stack.pop()
+        if c.name in skip:
+            continue
+        out.append(c)
+        stack.extend(c.children)
+    return out
+
+
+def _warn_placement(ob: bpy.types.Object, warnings: list[str]) -> None:
+    """Warn when a linked object's place is not its transforms and parents alone (:func:`world_matrix`)."""
+    chain = ob
+    while chain is not None:
+        if any(getattr(c, "enabled", True) and not getattr(c, "mute", False) for c in chain.constraints):
+            warnings.append(
+                f"curve '{ob.name}': the constraints of '{chain.name}' are not applied when a .blend file is read "
+                "(apply them: Object ▸ Apply ▸ Visual Transform)"
+            )
+            return
+        if chain.parent is not None and chain.parent_type != "OBJECT":
+            warnings.append(
+                f"curve '{ob.name}': its {chain.parent_type.lower()} parent is not applied when a .blend file is "
+                "read (parent it to an object, or apply the parent: Alt+P ▸ Clear and Keep Transformation)"
+            )
+            return
+        chain = chain.parent
 
 
 register_blend_reader(read_blend_file)

@@ -108,9 +108,12 @@ def pattern_steps(objects, *, interval: float = 0.0, tolerance: float = 0.0) -> 
     stored = stored_pattern(objects)  # an unedited FOLD import: its own pattern, as the command line folds it
     if stored is not None:
         return stored
-    curves = yield from as_units(curves_steps(objects), "reading curves")
+    notes: list[str] = []  # spline-level warnings (a one-point spline, modifiers not folded, ...)
+    curves = yield from as_units(curves_steps(objects, warnings=notes), "reading curves")
     yield "curves read"
-    return (yield from discretize_steps(curves, interval=interval or None, tolerance=tolerance or None))
+    pattern = yield from discretize_steps(curves, interval=interval or None, tolerance=tolerance or None)
+    pattern.warnings = notes + list(pattern.warnings)
+    return pattern
 
 
 def display_metrics(mesh: FoldMesh, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -322,8 +325,8 @@ def solve_progress(
 
 def _mesh_steps(pattern_units, angle, mesh_type) -> Generator[jobs.Progress, None, Any]:
     """Discretise (in the units of ``pattern_units``, a :func:`pattern_steps` generator), then triangulate with the
-    ruling swaps (one unit); returns the FoldMesh and the pattern's warnings. Each unit is usually under 100 ms;
-    docs/benchmarks.md lists where it is not."""
+    ruling swaps (one unit); returns the FoldMesh and its warnings (the pattern's first). Each unit is usually
+    under 100 ms; docs/benchmarks.md lists where it is not."""
     from ..core.mesh.build import build_mesh
     from ..core.pipeline import _with_angle
 
@@ -332,7 +335,7 @@ def _mesh_steps(pattern_units, angle, mesh_type) -> Generator[jobs.Progress, Non
     yield jobs.Progress("mesh")
     mesh = build_mesh(pattern, mesh_type=engine_id(mesh_type))
     yield jobs.Progress("model")
-    return mesh, list(getattr(pattern, "warnings", []) or []) + list(mesh.warnings)
+    return mesh, list(mesh.warnings)  # build_mesh puts the pattern's warnings first
 
 
 def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None, constraints=None):

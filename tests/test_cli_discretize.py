@@ -69,6 +69,10 @@ def test_given_parameters_and_warnings_are_printed(tmp_path: Path) -> None:
         (["missing.svg", "--out", "x.fold"], "missing.svg: no such file"),
         ([str(EXAMPLES / "single_curve.svg"), "--out", "x.obj"], "the output must be a .fold file"),
         ([str(EXAMPLES / "single_curve.svg"), "--out", "x.fold", "--interval", "-2"], "--interval -2"),
+        (
+            [str(EXAMPLES / "single_curve.svg"), "--out", "x.fold", "--collection", "A"],
+            "single_curve.svg: only a .blend file has collections to choose from ('A')",
+        ),
     ],
 )
 def test_bad_input_exits_2_with_one_line(args: list[str], message: str, tmp_path: Path) -> None:

@@ -314,7 +314,8 @@ def test_read_blend_file_leaves_the_open_file_alone(mod, clean_scene, tmp_path):
 
     bpy.ops.wm.read_homefile(use_empty=True)
     before = {name: len(getattr(bpy.data, name)) for name in ("objects", "curves", "libraries", "scenes")}
-    curves = mod.read_blend_file(path)
+    curves, warnings = mod.read_blend_file(path)
+    assert warnings == []
     after = {name: len(getattr(bpy.data, name)) for name in ("objects", "curves", "libraries", "scenes")}
     assert after == before
     assert sorted(c.source for c in curves) == sorted(c.source for c in expected)
@@ -330,6 +331,105 @@ def test_read_blend_file_leaves_the_open_file_alone(mod, clean_scene, tmp_path):
     with pytest.raises(mod.PatternError, match="text.blend: cannot read as a .blend file"):
         mod.read_blend_file(tmp_path / "text.blend")
     assert len(bpy.data.libraries) == 0
+
+
+def test_read_blend_file_places_curves_as_blender_shows_them(mod, clean_scene, tmp_path):
+    """A .blend file read from disk (the command line's input) gives the curves where the viewport draws them: moved,
+    rotated, mirrored, delta-transformed and parented objects included (linked objects are in no scene, so Blender
+    leaves their matrix_world at the identity; the command line read every crease at its object origin)."""
+    mm_per_bu_one(clean_scene)
+    parent = bpy.data.objects.new("Rig", None)
+    clean_scene.collection.objects.link(parent)
+    parent.location = (7.0, -3.0, 0.0)
+    parent.rotation_euler.z = 0.4
+    parent.scale = (1.5, 1.5, 1.5)
+    border = poly_object("Border", BORDER, role="BORDER")
+    border.parent = parent
+    valley = bezier_object("Valley", VALLEY, role="VALLEY", angle=90.0)
+    valley.parent = parent
+    valley.location.x = 12.0
+    valley.delta_rotation_euler.z = 0.1
+    mountain = bezier_object("Mountain", MOUNTAIN, role="MOUNTAIN", angle=60.0)
+    mountain.parent = valley
+    mountain.scale.x = -1.0
+    mountain.location.x = 100.0
+    bpy.context.view_layer.update()
+    expected = mod.curves_from_objects([border, valley, mountain])
+    path = tmp_path / "moved.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path), copy=True)
+
+    bpy.ops.wm.read_homefile(use_empty=True)
+    curves, warnings = mod.read_blend_file(path)
+    assert warnings == []
+    by_source = {c.source: c for c in curves}
+    assert sorted(by_source) == sorted(c.source for c in expected)
+    for c in expected:
+        for sa, sb in zip(by_source[c.source].segments, c.segments, strict=True):
+            np.testing.assert_allclose(sa.points, sb.points, atol=1e-4)
+
+
+def test_read_blend_file_reads_the_scene_or_a_chosen_collection(mod, clean_scene, tmp_path):
+    """The command line folds what the file's scene shows: an old version kept in a collection excluded from the
+    view layer is left out (named in a warning), two patterns side by side are warned about, and ``collection``
+    picks one; an unknown collection is one clear error listing those there are."""
+    mm_per_bu_one(clean_scene)
+    made = {}
+    for name, dx in (("A", 0.0), ("B", 300.0), ("Old", 600.0)):
+        coll = bpy.data.collections.new(name)
+        clean_scene.collection.children.link(coll)
+        for ob in (
+            poly_object(f"Border {name}", [(x + dx, y) for x, y in BORDER], role="BORDER"),
+            bezier_object(f"Valley {name}", [tuple((x + dx, y) for x, y in k) for k in VALLEY], role="VALLEY"),
+        ):
+            for c in ob.users_collection:
+                c.objects.unlink(ob)
+            coll.objects.link(ob)
+        made[name] = coll
+    bpy.context.view_layer.layer_collection.children["Old"].exclude = True
+    path = tmp_path / "versions.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path), copy=True)
+
+    bpy.ops.wm.read_homefile(use_empty=True)
+    curves, warnings = mod.read_blend_file(path)
+    assert sorted(c.source.split("'")[1] for c in curves) == ["Border A", "Border B", "Valley A", "Valley B"]
+    assert any("'Border Old'" in w and "excluded from the view layer" in w for w in warnings)
+    assert any("2 collections ('A', 'B')" in w and "--collection" in w for w in warnings)
+    curves, warnings = mod.read_blend_file(path, collection="Old")
+    assert sorted(c.source.split("'")[1] for c in curves) == ["Border Old", "Valley Old"]
+    assert warnings == []
+    with pytest.raises(
+        mod.PatternError, match=r"versions.blend: no collection named 'C' \(the file has 'A', 'B', 'Old'\)"
+    ):
+        mod.read_blend_file(path, collection="C")
+    assert len(bpy.data.libraries) == 0
+
+
+def test_what_the_viewport_draws_but_does_not_fold_is_said(extension, mod, clean_scene):
+    """Modifiers and shape keys change what the viewport draws, not the splines that fold: a Mirror modifier's
+    second valley was left out without a word. The warnings reach the fold's pattern (the Fold operator's
+    report), as a one-point spline's does; before, the operators dropped every warning met reading the curves."""
+    mm_per_bu_one(clean_scene)
+    border = poly_object("Border", BORDER, role="BORDER")
+    valley = bezier_object("Valley", VALLEY, role="VALLEY", angle=90.0)
+    valley.modifiers.new("Mirror", "MIRROR")
+    mountain = bezier_object("Mountain", MOUNTAIN, role="MOUNTAIN", angle=90.0)
+    mountain.shape_key_add(name="Basis")
+    mountain.shape_key_add(name="Bent", from_mix=False).value = 1.0
+    point = mountain.data.splines.new("POLY")  # a stray one-point spline
+    point.points[0].co = (5.0, 5.0, 0.0, 1.0)
+    notes: list[str] = []
+    mod.curves_from_objects([border, valley, mountain], warnings=notes)
+    assert any("curve 'Valley': its modifier(s) 'Mirror' are not folded" in w for w in notes), notes
+    assert any("curve 'Mountain': its shape keys are not folded" in w for w in notes), notes
+    assert any("curve 'Mountain' spline 1: fewer than two points, skipped" in w for w in notes), notes
+    folding = importlib.import_module(extension.__name__ + ".scene.folding")
+    pattern = folding.pattern_from_objects([border, valley, mountain])
+    assert [w for w in pattern.warnings if w in notes] == notes
+    valley.modifiers[0].show_viewport = False
+    mountain.data.shape_keys.key_blocks["Bent"].value = 0.0
+    notes.clear()
+    mod.curves_from_objects([border, valley, mountain], warnings=notes)
+    assert not any("not folded" in w for w in notes), notes
 
 
 def test_objects_from_curves_failure_creates_nothing(mod, clean_scene):

@@ -167,10 +167,26 @@ def test_crease_crossing_the_border_is_trimmed_with_a_warning() -> None:
     assert any("removed 2 crease segment(s) outside the border, from long crease" in w for w in p.warnings)
 
 
-def test_open_border_is_reported() -> None:
+def test_border_open_at_one_place_is_closed_with_a_straight_edge() -> None:
     b = CreaseCurve([line((0, 0), (10, 0)), line((10, 0), (10, 10))], "B", None, source="half")
     p = discretize([b], interval=100, tolerance=1)
-    assert any("border is not closed: 2 loose end(s)" in w for w in p.warnings)
+    assert any(
+        "the border is not closed (half): joined its loose ends at (0.000, 0.000) and (10.000, 10.000) mm with a "
+        "straight edge, 14.14 mm long" in w
+        for w in p.warnings
+    ), p.warnings
+    degree = np.bincount(p.edges[p.assignments == "B"].ravel(), minlength=p.n_vertices)
+    assert set(degree[degree > 0].tolist()) == {2}  # one closed loop
+
+
+def test_border_open_at_several_places_is_reported() -> None:
+    sides = [
+        CreaseCurve([line((0, 0), (10, 0))], "B", None, source="bottom"),
+        CreaseCurve([line((10, 1), (10, 10)), line((10, 10), (0, 10))], "B", None, source="right and top"),
+    ]
+    p = discretize(sides, interval=100, tolerance=1)
+    assert any("border is not closed: 4 loose end(s)" in w for w in p.warnings), p.warnings
+    assert not any("joined its loose ends" in w for w in p.warnings)
 
 
 @pytest.mark.slow

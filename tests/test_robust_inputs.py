@@ -82,18 +82,21 @@ def test_no_border_single_line() -> None:
         fold_pattern(p, angle=90)
 
 
-def test_open_border_warns_with_loose_ends_and_still_folds() -> None:
+def test_border_left_open_is_closed_and_the_sheet_folds_whole() -> None:
+    """A rectangle drawn as four points without closing it (Blender's Cyclic or SVG's Z forgotten) is the sheet's
+    outline to its designer. It was left open: only the part on one side of the crease counted as paper, the
+    crease became the sheet's edge and the pattern did not fold."""
     p = pattern_of(
         '<path id="border" d="M0 0 L100 0 L100 100 L0 100" stroke="#000" fill="none"/>'
         '<path id="c" d="M50 0 L50 100" stroke="#f00"/>'
     )
     warning = next(w for w in p.warnings if "border is not closed" in w)
-    assert "2 loose end(s) at (0.000, 0.000), (0.000, -100.000) mm" in warning  # SVG y-down flipped: y = -100
-    assert_folds_finite(p, angle=90)
-    # only the closed half is paper, so the crease lies on its edge: said, not a silent flat result
-    report = fold_pattern(p, angle=90).report
-    assert report["does_not_fold_as_assigned"]
-    assert "no crease has paper on both sides" in report["does_not_fold_message"]
+    # SVG y-down flipped: y = -100
+    assert "joined its loose ends at (0.000, 0.000) and (0.000, -100.000) mm with a straight edge, 100 mm" in warning
+    assert "<path id='border'>" in warning
+    run = fold_pattern(p, angle=90)
+    assert run.result.converged and not run.report["does_not_fold_as_assigned"]
+    assert np.ptp(run.mesh.vertices[:, 0]) == pytest.approx(100.0)  # the whole sheet, not the half beyond the crease
 
 
 def test_a_black_slit_inside_the_sheet_is_named_and_read_as_a_cut() -> None:

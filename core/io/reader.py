@@ -21,22 +21,23 @@ from . import limits
 SUFFIXES = (".svg", ".fold", ".blend")
 
 
-_blend_reader: list[Callable[[str], list[CreaseCurve]]] = []
+_blend_reader: list[Callable[..., tuple[list[CreaseCurve], list[str]]]] = []
 """The registered .blend reader (at most one), see :func:`register_blend_reader`."""
 
 
-def register_blend_reader(reader: Callable[[str], list[CreaseCurve]]) -> None:
-    """Let :func:`read_curves` open .blend files with ``reader`` (path → crease curves); Blender's layer calls this."""
+def register_blend_reader(reader: Callable[..., tuple[list[CreaseCurve], list[str]]]) -> None:
+    """Let :func:`read_curves` open .blend files with ``reader`` (``(path, collection=None)`` → crease curves and
+    warnings); Blender's layer calls this."""
     _blend_reader[:] = [reader]
 
 
-def _blend_curves(path: Path) -> list[CreaseCurve]:
+def _blend_curves(path: Path, collection: str | None = None) -> tuple[list[CreaseCurve], list[str]]:
     if not _blend_reader:
         raise PatternError(f"{path.name}: reading .blend files needs Blender (bpy), which is not available here")
-    curves = _blend_reader[0](str(path))
+    curves, warnings = _blend_reader[0](str(path), collection=collection)
     if not curves:
         raise PatternError(f"{path.name}: no crease curves found in the .blend file")
-    return curves
+    return curves, warnings
 
 
 def _suffix(path: Path) -> str:
@@ -97,18 +98,21 @@ def read_input_bytes(path: str | os.PathLike[str], kind: str) -> bytes:
     return data
 
 
-def read_curves(path: str | os.PathLike[str]) -> tuple[list[CreaseCurve], list[str]]:
+def read_curves(path: str | os.PathLike[str], *, collection: str | None = None) -> tuple[list[CreaseCurve], list[str]]:
     """The crease curves of a file and the warnings met reading them: exact curves from .svg and .blend, polylines
-    (segments chained through vertices where two meet, ``core.pattern.polylines``) from .fold."""
+    (segments chained through vertices where two meet, ``core.pattern.polylines``) from .fold. ``collection``: of a
+    .blend file, the curves of that collection only (else those of its scene)."""
     p = Path(path)
     suffix = _suffix(p)
+    if collection is not None and suffix != ".blend":
+        raise PatternError(f"{p.name}: only a .blend file has collections to choose from ('{collection}')")
     if suffix == ".svg":
         from .svg import read_svg
 
         drawing = read_svg(p)
         return drawing.curves, list(drawing.warnings)
     if suffix == ".blend":
-        return _blend_curves(p), []
+        return _blend_curves(p, collection)
     from ..pattern.polylines import curves_from_pattern
     from .fold import read_fold_pattern
 
@@ -122,20 +126,21 @@ def read_pattern(
     interval: float | None = None,
     tolerance: float | None = None,
     merge_tolerance: float | None = None,
+    collection: str | None = None,
 ) -> CreasePattern:
     """Read and discretise a crease pattern (.svg, .blend) or read a discretised one (.fold).
 
     Discretisation parameters are in mm; ``None`` means the scale-aware defaults (see ``core.pattern.discretize``).
     They are ignored for FOLD files, which are already straight segments. Warnings from reading come first in
-    the pattern's ``warnings``.
+    the pattern's ``warnings``. ``collection``: see :func:`read_curves`.
     """
     p = Path(path)
     suffix = _suffix(p)
-    if suffix == ".fold":
+    if suffix == ".fold" and collection is None:
         from .fold import read_fold_pattern
 
         return read_fold_pattern(p)
-    curves, warnings = read_curves(p)
+    curves, warnings = read_curves(p, collection=collection)
     pattern = discretize(curves, interval=interval, tolerance=tolerance, merge_tolerance=merge_tolerance)
     pattern.warnings = warnings + pattern.warnings
     return pattern

@@ -1022,6 +1022,58 @@ def _outer_boundary(verts: np.ndarray, e: np.ndarray, core: np.ndarray) -> np.nd
     return on
 
 
+def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnings: list[str]) -> list[CreaseCurve]:
+    """Close a border left open at one place: when the border strokes together have exactly two loose ends (ends
+    that meet no other border end within ``merge_tolerance``), a straight border stroke joins them, with a warning.
+
+    A rectangle drawn as four points with Cyclic forgotten, or an outline whose last point misses its first by a
+    fraction of a millimetre, is what the designer sees as the sheet's outline; left open, the border separated no
+    paper from outside, so the crease nearest the gap became the sheet's edge and the strip beyond it was dropped.
+    Borders open at several places are left as they are (which ends belong together is a guess) and warned about
+    where the segments are clipped."""
+    ends = [
+        (k, side, c.segments[0].points[0] if side == 0 else c.segments[-1].points[-1])
+        for k, c in enumerate(curves)
+        if c.assignment == "B" and not c.closed and c.segments
+        for side in (0, 1)
+    ]
+    if len(ends) < 2:
+        return curves
+    pts = np.array([p for _, _, p in ends], dtype=np.float64)
+    loose = [i for i, met in enumerate(_ends_met(pts, merge_tolerance)) if met % 2 == 0]  # odd: joined
+    if len(loose) != 2:
+        return curves
+    a, b = pts[loose[0]], pts[loose[1]]
+    gap = float(np.hypot(*(b - a)))
+    if gap <= merge_tolerance:
+        return curves
+    names = sorted({curves[ends[i][0]].source or f"curve {ends[i][0]}" for i in loose})
+    closing = CreaseCurve(
+        [CurveSegment("line", np.array([a, b]))], "B", None, source=f"the straight edge closing {' and '.join(names)}"
+    )
+    warnings.append(
+        f"the border is not closed ({', '.join(names)}): joined its loose ends at ({a[0]:.3f}, {a[1]:.3f}) and "
+        f"({b[0]:.3f}, {b[1]:.3f}) mm with a straight edge, {gap:.4g} mm long (close the outline where you drew it, "
+        "e.g. Cyclic in Blender, Z in SVG)"
+    )
+    return [*curves, closing]
+
+
+def _ends_met(pts: np.ndarray, tol: float) -> list[int]:
+    """For each point, how many others lie within ``tol`` (a grid of ``tol`` cells: linear in the number of
+    points, where all pairs would take quadratic memory on a border drawn as thousands of strokes)."""
+    cell = max(float(tol), 1e-300)
+    keys = np.floor(pts / cell).astype(np.int64)
+    grid: dict[tuple[int, int], list[int]] = {}
+    for i, (kx, ky) in enumerate(keys.tolist()):
+        grid.setdefault((kx, ky), []).append(i)
+    met = []
+    for i, (kx, ky) in enumerate(keys.tolist()):
+        near = [j for dx in (-1, 0, 1) for dy in (-1, 0, 1) for j in grid.get((kx + dx, ky + dy), ()) if j != i]
+        met.append(int(np.count_nonzero(np.hypot(*(pts[near] - pts[i]).T) <= tol)) if near else 0)
+    return met
+
+
 def _clip_to_border(
     verts: np.ndarray,
     edges: np.ndarray,
@@ -1135,6 +1187,7 @@ def discretize_steps(
     _check_coordinates(curves)
     warnings: list[str] = []
     interval, tolerance, merge_tolerance = _resolve_parameters(curves, interval, tolerance, merge_tolerance, warnings)
+    curves = _close_open_border(curves, merge_tolerance, warnings)
     sources = [c.source or f"curve {k}" for k, c in enumerate(curves)]
     interval, tolerance = _guard_explosion(curves, interval, tolerance, warnings)
     yield "parameters"

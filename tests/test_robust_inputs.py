@@ -120,6 +120,22 @@ def test_a_black_slit_inside_the_sheet_is_named_and_read_as_a_cut() -> None:
     assert report["warnings"] == black.warnings and not report["does_not_fold_as_assigned"]
 
 
+@pytest.mark.parametrize(
+    "line",
+    [
+        '<path id="l" d="M 50 0 L 50 70" stroke="#000"/>',  # a slit from the edge
+        '<path id="l" d="M 50 0 C 20 40 80 60 50 100" stroke="#000"/>',  # a curve across the sheet
+        '<path id="l" d="M 20 30 C 40 10 60 50 80 30" stroke="#000"/>',  # loose inside
+    ],
+)
+def test_a_black_line_in_a_closed_sheet_is_not_taken_for_an_open_outline(line: str) -> None:
+    """Its two loose ends are the only ones of the border, but they lie on or inside the closed outline: the line is
+    no gap in it. Closing it "with a straight edge" drew a chord across the sheet that was never drawn."""
+    p = pattern_of(BORDER + "\n" + line)
+    assert [w.split(":")[0] for w in p.warnings] == ["black (border) line(s) inside the sheet"]
+    assert {p.sources[k] for k in p.edge_polyline[p.assignments == "C"]} == {"SVG <path id='l'> (line 4)"}
+
+
 def test_a_black_line_across_or_loose_inside_the_sheet_is_a_cut_and_a_black_hole_stays_a_border() -> None:
     """A dashed black line across the sheet (packaging's crease convention) and a black line touching nothing inside
     the sheet are cuts, named in one line; a closed black loop inside (a hole's outline) stays a border."""

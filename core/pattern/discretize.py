@@ -1030,7 +1030,9 @@ def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnin
     fraction of a millimetre, is what the designer sees as the sheet's outline; left open, the border separated no
     paper from outside, so the crease nearest the gap became the sheet's edge and the strip beyond it was dropped.
     Borders open at several places are left as they are (which ends belong together is a guess) and warned about
-    where the segments are clipped."""
+    where the segments are clipped. A black line whose loose end lies on or inside a closed border stroke (a slit
+    from the edge, a line across or inside the sheet) is no gap in the outline: :func:`_stray_border_as_cuts` makes
+    it a cut (closing it drew a straight chord across the sheet that was never drawn)."""
     ends = [
         (k, side, c.segments[0].points[0] if side == 0 else c.segments[-1].points[-1])
         for k, c in enumerate(curves)
@@ -1041,7 +1043,7 @@ def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnin
         return curves
     pts = np.array([p for _, _, p in ends], dtype=np.float64)
     loose = [i for i, met in enumerate(_ends_met(pts, merge_tolerance)) if met % 2 == 0]  # odd: joined
-    if len(loose) != 2:
+    if len(loose) != 2 or _on_or_inside_closed_border(pts[loose], curves, SNAP_FACTOR * merge_tolerance).any():
         return curves
     a, b = pts[loose[0]], pts[loose[1]]
     gap = float(np.hypot(*(b - a)))
@@ -1057,6 +1059,19 @@ def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnin
         "e.g. Cyclic in Blender, Z in SVG)"
     )
     return [*curves, closing]
+
+
+def _on_or_inside_closed_border(points: np.ndarray, curves: list[CreaseCurve], tol: float) -> np.ndarray:
+    """Which ``points`` lie inside, or within ``tol`` of, a closed border stroke (each sampled as a polygon)."""
+    out = np.zeros(len(points), dtype=bool)
+    for c in curves:
+        if c.assignment != "B" or not c.closed or not c.segments:
+            continue
+        a = np.concatenate([s.evaluate(np.linspace(0.0, 1.0, 65)) for s in c.segments])
+        b = np.roll(a, -1, axis=0)
+        out |= _inside_border(points, a, b)
+        out |= np.array([_point_segment_distance(np.broadcast_to(q, a.shape), a, b).min() <= tol for q in points])
+    return out
 
 
 def _ends_met(pts: np.ndarray, tol: float) -> list[int]:

@@ -99,6 +99,63 @@ def test_border_left_open_is_closed_and_the_sheet_folds_whole() -> None:
     assert np.ptp(run.mesh.vertices[:, 0]) == pytest.approx(100.0)  # the whole sheet, not the half beyond the crease
 
 
+def test_a_black_slit_inside_the_sheet_is_named_and_read_as_a_cut() -> None:
+    """A black line from the edge into the sheet (a tester's slit, with a valley across it and a crease drawn past
+    the edge): the warnings were "the border is not closed: 2 loose end(s) at (75.000, 0.000) …" for a closed
+    outline, creases past the edge were not trimmed, and "triangulation: border lines do not separate paper from
+    outside consistently" named nothing. One line now names the element; the outline is closed, so the crease past
+    the edge is trimmed as usual, and the slit is a cut (as the same slit drawn green)."""
+    slit = '\n<path id="slit" d="M 50 0 L 50 70" stroke="#000"/>'
+    crease = '\n<path id="over" d="M -10 50 L 110 50" stroke="#00f"/>'
+    black = pattern_of(BORDER + slit + crease)
+    assert black.warnings == [
+        "black (border) line(s) inside the sheet: SVG <path id='slit'> (line 4); a border must be the sheet's "
+        "outline, so they are read as cuts (draw a cut in green, a crease in red/blue)",
+        "removed 2 crease segment(s) outside the border, from SVG <path id='over'> (line 5)",
+    ]
+    green = pattern_of(BORDER + slit.replace("#000", "#0f0") + crease)
+    for role in "BCV":
+        assert black.count(role) == green.count(role) > 0
+    report = assert_folds_finite(black, angle=90)
+    assert report["warnings"] == black.warnings and not report["does_not_fold_as_assigned"]
+
+
+@pytest.mark.parametrize(
+    "line",
+    [
+        '<path id="l" d="M 50 0 L 50 70" stroke="#000"/>',  # a slit from the edge
+        '<path id="l" d="M 50 0 C 20 40 80 60 50 100" stroke="#000"/>',  # a curve across the sheet
+        '<path id="l" d="M 20 30 C 40 10 60 50 80 30" stroke="#000"/>',  # loose inside
+    ],
+)
+def test_a_black_line_in_a_closed_sheet_is_not_taken_for_an_open_outline(line: str) -> None:
+    """Its two loose ends are the only ones of the border, but they lie on or inside the closed outline: the line is
+    no gap in it. Closing it "with a straight edge" drew a chord across the sheet that was never drawn."""
+    p = pattern_of(BORDER + "\n" + line)
+    assert [w.split(":")[0] for w in p.warnings] == ["black (border) line(s) inside the sheet"]
+    assert {p.sources[k] for k in p.edge_polyline[p.assignments == "C"]} == {"SVG <path id='l'> (line 4)"}
+
+
+def test_a_black_line_across_or_loose_inside_the_sheet_is_a_cut_and_a_black_hole_stays_a_border() -> None:
+    """A dashed black line across the sheet (packaging's crease convention) and a black line touching nothing inside
+    the sheet are cuts, named in one line; a closed black loop inside (a hole's outline) stays a border."""
+    p = pattern_of(
+        BORDER
+        + '\n<path id="dashed" d="M 30 0 C 10 40 50 60 30 100" stroke="#000" stroke-dasharray="4 2"/>'
+        + '\n<line id="loose" x1="60" y1="20" x2="80" y2="20" stroke="black"/>'
+        + '\n<rect id="hole" x="60" y="60" width="20" height="20" stroke="#000"/>'
+        + '\n<path id="v" d="M 90 0 L 90 100" stroke="#00f"/>'
+    )
+    assert p.warnings == [
+        "black (border) line(s) inside the sheet: SVG <path id='dashed'> (line 4), SVG <line id='loose'> (line 5); "
+        "a border must be the sheet's outline, so they are read as cuts (draw a cut in green, a crease in red/blue)"
+    ]
+    border_sources = {p.sources[k] for k in p.edge_polyline[p.assignments == "B"]}
+    cut_sources = {p.sources[k] for k in p.edge_polyline[p.assignments == "C"]}
+    assert border_sources == {"SVG <path id='border'> (line 3)", "SVG <rect id='hole'> (line 6)"}
+    assert cut_sources == {"SVG <path id='dashed'> (line 4)", "SVG <line id='loose'> (line 5)"}
+
+
 def test_self_crossing_border_is_an_error() -> None:
     with pytest.raises(PatternError, match=r"border crosses or touches itself at \(50\.000, -50\.000\) mm") as exc:
         pattern_of('<path id="border" d="M0 0 L100 100 L100 0 L0 100 Z" stroke="#000" fill="none"/>')

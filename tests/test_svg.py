@@ -351,6 +351,59 @@ def test_units_and_viewbox(head: str, scale: float) -> None:
     np.testing.assert_allclose(c.segments[0].points[1] - c.segments[0].points[0], [10 * scale, -20 * scale])
 
 
+def test_lengths_with_absolute_units_on_shapes_are_css_lengths() -> None:
+    """``<rect width="150mm">``, ``x1="0mm"``: CSS absolute units on geometry attributes (a user unit is a px, 1/96
+    in, as for a root without a viewBox). They were refused ("is not a number in user units"). A tester's file of
+    425.19685pt × 15cm without a viewBox: its 150 mm border and the diagonal to (566.929, 566.929) px meet."""
+    d = parse_svg_text(
+        svg(
+            '<rect stroke="#000" width="150mm" height="15cm"/>\n<line stroke="red" x2="566.929" y2="566.929"/>\n'
+            '<line stroke="red" x1="1in" y1="72pt" x2="6pc" y2="40Q"/>\n<circle stroke="red" cx="96PX" r="2.54CM"/>',
+            head='width="425.19685pt" height="15cm"',
+        ),
+        "units.svg",
+    )
+    border, diagonal, mixed, circle = d.curves
+    np.testing.assert_allclose(border.segments[1].points, [[150, 0], [150, -150]], atol=1e-9)
+    np.testing.assert_allclose(diagonal.segments[0].points[1], [150, -150], atol=1e-4)
+    np.testing.assert_allclose(mixed.segments[0].points, [[25.4, -25.4], [25.4, -10]], atol=1e-9)
+    np.testing.assert_allclose([circle.segments[0].arc[0], circle.segments[0].arc[2]], [25.4, 25.4], atol=1e-9)
+    assert d.warnings == []
+
+
+def test_lengths_in_mm_under_a_viewbox_of_another_scale_are_drawn_as_browsers_draw_them_and_said() -> None:
+    """``x1="50mm"`` is 188.98 user units whatever the viewBox; with ``viewBox="0 0 100 100"`` on 100 mm a user
+    unit is 1 mm, so the line lands 189 mm down, off the sheet, as rsvg-convert draws it: one line says why."""
+    d = parse_svg_text(
+        svg('<line id="u" x1="0mm" y1="50mm" x2="100mm" y2="50mm" stroke="#f00"/>\n<line stroke="red" x2="5px"/>'),
+        "unitlen.svg",
+    )
+    np.testing.assert_allclose(d.curves[0].segments[0].points, [[0, -50 / PX_MM], [100 / PX_MM, -50 / PX_MM]])
+    assert d.warnings == [
+        "unitlen.svg: lengths with units on shapes are CSS lengths (96 px, that is 96 user units, to the inch), "
+        "which this file's viewBox or transforms draw at another size, as browsers do: SVG <line id='u'> (line 2) "
+        "(drawn 3.78× the size written); write them without units to mean the file's own units"
+    ]
+
+
+def test_percentages_are_of_the_viewport_and_font_units_are_refused() -> None:
+    """Percentages: x and width of the viewport's width, y and height of its height, r of its diagonal / √2
+    (SVG 1.1 §7.10), in the user units of the viewBox."""
+    (rect, circle) = curves_of(
+        '<rect stroke="#000" x="10%" y="50%" width="50%" height="25%"/><circle stroke="red" cx="0" r="10%"/>',
+        head='viewBox="0 0 200 100" width="200mm" height="100mm"',
+    )
+    np.testing.assert_allclose(rect.segments[0].points, [[20, -50], [120, -50]])
+    np.testing.assert_allclose(rect.segments[1].points, [[120, -50], [120, -75]])
+    assert circle.segments[0].arc[2] == pytest.approx(math.hypot(200, 100) / math.sqrt(2) / 10)
+    with pytest.raises(PatternError, match=r"<line> \(line 2\): attribute x2='50%' is a percentage of the viewport"):
+        parse_svg_text(svg('<line stroke="red" x2="50%"/>', head=""), "p.svg")
+    with pytest.raises(PatternError, match=r"<line id='e'> \(line 2\): attribute x1='2em' is in em, a unit relative"):
+        parse_svg_text(svg('<line id="e" stroke="red" x1="2em"/>'), "e.svg")
+    with pytest.raises(PatternError, match=r"attribute x1='3furlongs' is not a number \(a length in user units"):
+        parse_svg_text(svg('<line stroke="red" x1="3furlongs"/>'), "f.svg")
+
+
 def test_viewbox_origin_and_aspect_ratio_meet() -> None:
     head = 'viewBox="10 10 100 50" width="100mm" height="100mm"'  # meet: scale 1, centred vertically (+25 mm)
     d = parse_svg_text(svg('<line stroke="red" x1="10" y1="10" x2="110" y2="60"/>', head), "u.svg")
@@ -385,7 +438,22 @@ def test_viewbox_origin_and_aspect_ratio_meet() -> None:
         ("#f0f", "U"),
         ("#c80000", None),
         ("#fe0000", None),
-        ("rgba(255,0,0,0.5)", None),
+        ("rgba(255,0,0,0.5)", "M"),
+        ("hsl(0, 100%, 50%)", "M"),
+        ("hsl(240deg 100% 50%)", "V"),
+        ("hsla(0.5turn,100%,50%,1)", None),  # cyan
+        ("rgb(0 0 255)", "V"),
+        ("rgb(0 0 255 / 60%)", "V"),
+        ("rgb(0% 0% 100%)", "V"),
+        ("#ff000099", "M"),
+        ("#f009", "M"),
+        ("#F00F", "M"),
+        ("rgb(0 0 255 0.5)", None),
+        ("rgb(0, 0 255)", None),
+        ("rgb(255,0,0,0.5,1)", None),
+        ("rgb(nan,0,0)", None),  # a ValueError traceback before
+        ("rgb(1e999,0,0)", None),  # an OverflowError traceback before
+        ("#ff00009", None),
         ("none", None),
         ("gray", None),
         (None, None),
@@ -406,7 +474,7 @@ def test_unknown_colours_are_skipped_with_one_warning() -> None:
     assert len(d.curves) == 1
     assert len(d.warnings) == 1
     w = d.warnings[0]
-    assert "#123456 (3 elements: lines 2, 3, 6)" in w and "no stroke (1 element: line 4)" in w
+    assert "#123456 (3 elements: lines 2, 3, 6)" in w and "line 4" not in w  # a line without a stroke: not a crease
 
 
 def test_opacity_gives_the_fold_angle() -> None:
@@ -418,6 +486,102 @@ def test_opacity_gives_the_fold_angle() -> None:
     angles = [c.fold_angle for c in cs]
     assert angles[:3] == [pytest.approx(-90), pytest.approx(108), pytest.approx(45)]
     assert angles[3:] == [None, 0.0, None, None]
+
+
+def test_every_css_spelling_of_a_role_colour_is_read_and_its_alpha_is_a_stroke_opacity() -> None:
+    """hsl(), rgb() in CSS Color 4's space syntax (with ``/ alpha``), rgba(), percentages, 8- and 4-digit hex: a
+    tester's files had them skipped as "unknown stroke colour". The alpha multiplies the fold angle as
+    stroke-opacity does (and with it: 0.6 × 0.5 × 180° = 54°)."""
+    strokes = [
+        'stroke="hsl(0, 100%, 50%)" stroke-opacity="0.6"',
+        'stroke="rgb(0 0 255)" stroke-opacity="0.6"',
+        'stroke="rgb(0 0 255 / 60%)"',
+        'stroke="rgba(255,0,0,0.6)"',
+        'stroke="rgb(0%,0%,100%)" stroke-opacity=".6"',
+        'stroke="#ff000099"',
+        'stroke="#f009"',
+        'stroke="rgba(255, 0, 0, .6)" stroke-opacity="0.5"',
+        'style="stroke: hsla(240 100% 50% / 0.6)" opacity="0.5"',
+    ]
+    d = parse_svg_text(svg("\n".join(f'<line {s} x2="1"/>' for s in strokes)), "c.svg")
+    assert d.warnings == []
+    got = [(c.assignment, round(c.fold_angle, 9)) for c in d.curves]
+    assert got == [("M", -108), ("V", 108), ("V", 108), ("M", -108), ("V", 108), ("M", -108), ("M", -108)] + [
+        ("M", -54),
+        ("V", 54),
+    ]
+
+
+def test_shapes_without_a_stroke_are_skipped_quietly_and_filled_ones_noted() -> None:
+    """``stroke="none"`` (LibreOffice's invisible bounding boxes), no stroke or a transparent one draws no line, so
+    it cannot be a crease: it is skipped without the "unknown stroke colours" warning that listed it. Only a shape
+    filled in a role colour (SVG's default fill is black) is noted, in a line of its own: it may be the sheet drawn
+    as a silhouette."""
+    d = parse_svg_text(
+        svg(
+            '<rect class="BoundingBox" stroke="none" fill="none" x="-1" y="-1" width="102" height="102"/>\n'
+            '<line id="l" x2="3"/>\n<path stroke="transparent" fill="none" d="M0 0 L1 1"/>\n'
+            '<g fill="none"><circle r="4"/></g>\n'
+            '<line stroke="red" x2="4"/>\n'
+            '<rect id="sheet" width="100" height="100"/>\n<circle stroke="none" fill="#ff0" r="3"/>'
+        ),
+        "lo.svg",
+    )
+    assert [c.assignment for c in d.curves] == ["M"]
+    assert d.warnings == [
+        "lo.svg: 2 filled shape(s) without a stroke skipped (only strokes are read; to make one the sheet's outline, "
+        "give it a black stroke): SVG <rect id='sheet'> (line 7), SVG <circle> (line 8)"
+    ]
+
+
+def test_unknown_colour_is_shown_as_written() -> None:
+    """The warning quotes the stroke as the file has it: ``rgb(0 0 254)`` was shown as ``rgb(00254)``."""
+    d = parse_svg_text(svg('<line stroke="red" x2="1"/>\n<line stroke=" rgb(0 0 254) " x2="1"/>'), "w.svg")
+    assert d.warnings == ["w.svg: unknown stroke colours (elements skipped): rgb(0 0 254) (1 element: line 3)"]
+
+
+def test_a_groups_opacity_is_not_a_fold_angle_and_one_line_says_so() -> None:
+    """Inkscape's layer opacity is ``<g opacity="0.6">``: its creases fold by their strokes' own opacity (180° here),
+    as before, but no longer silently. One line names each such group that holds creases, with its line and how
+    many creases it holds; a use's own opacity is a group's too."""
+    d = parse_svg_text(
+        svg(
+            '<g id="creases" opacity="0.6">\n<line stroke="red" x2="1"/><line stroke="#00f" x2="2"/>\n'
+            '<g style="opacity:50%"><line stroke="red" stroke-opacity="0.5" x2="3"/><line stroke="#000" x2="4"/></g>'
+            '</g>\n<g opacity="1"><line stroke="red" x2="5"/></g><g opacity="0.3"><line stroke="#000" x2="6"/></g>\n'
+            '<use href="#creases" opacity=".5"/>',
+            head=XLINK,
+        ),
+        "g.svg",
+    )
+    assert [c.fold_angle for c in d.curves] == [-180, 180, -90, None, -180, None, -180, 180, -90, None]
+    assert d.warnings == [
+        "g.svg: a group's opacity is not read as a fold angle: SVG <g id='creases'> (line 2) has opacity 0.6 around "
+        "3 crease(s); SVG <g> (line 4) has opacity 0.5 around 1 crease(s); SVG <use> (line 6) has opacity 0.5 "
+        "around 3 crease(s); SVG <g id='creases'> (line 2) via <use> (line 6) has opacity 0.6 around 3 crease(s) "
+        "and 1 more; its creases fold by their own strokes' opacity (180° when full): set stroke-opacity (or "
+        "opacity) to the fold angle / 180° (0.6 for 108°) on each stroke"
+    ]
+
+
+def test_a_crease_whose_opacity_gives_0_degrees_is_named() -> None:
+    """Opacity 0 (of the element, its stroke or its colour's alpha) leaves a mountain or valley without an angle:
+    it stays flat unless ``--angle`` gives it one. A tester's file folded nothing ("converged, 0 iterations") and
+    said nothing; one line now names the creases."""
+    d = parse_svg_text(
+        svg(
+            '<path id="zero" d="M 75 0 C 55 50 95 100 75 150" stroke="#0000ff" stroke-opacity="0"/>\n'
+            '<line stroke="red" opacity="0" x2="1"/><line stroke="#f000" x2="1"/><line stroke="red" x2="1"/>\n'
+            '<line stroke="yellow" opacity="0" x2="1"/><line stroke="black" stroke-opacity="0" x2="1"/>'
+        ),
+        "z.svg",
+    )
+    assert [c.fold_angle for c in d.curves] == [None, None, None, -180, 0, None]
+    assert d.warnings == [
+        "z.svg: 3 crease(s) with opacity 0 fold by 0° and stay flat: SVG <path id='zero'> (line 2), SVG <line> "
+        "(line 3), SVG <line> (line 3); set stroke-opacity (or opacity) to the fold angle / 180° (0.6 for 108°), "
+        "or give creases without an angle one with --angle (command line)"
+    ]
 
 
 def test_css_cascade_inheritance_and_precedence() -> None:
@@ -584,6 +748,63 @@ def test_use_draws_the_element_it_names_moved_by_its_transform_and_x_y() -> None
     assert curves[2].source == "SVG <line id='l'> (line 2) via <use> (line 4)"
 
 
+def test_a_nested_svg_is_a_viewport_of_its_own() -> None:
+    """``<svg x y width height viewBox>`` inside the drawing places and scales its content (SVG 1.1 §7.9): a tester's
+    line at y = 2.5 of ``viewBox="0 0 10 5"`` in the lower half (y 50–100) belongs at y = 75, not 2.5."""
+    (_, line) = curves_of(
+        '<rect width="100" height="100" fill="none" stroke="#000"/>\n'
+        '<svg x="0" y="50" width="100" height="50" viewBox="0 0 10 5">\n'
+        '<line id="nested" x1="0" y1="2.5" x2="10" y2="2.5" stroke="#00f" stroke-opacity="0.5"/></svg>'
+    )
+    np.testing.assert_allclose(line.segments[0].points, user([[0, 75], [100, 75]]), atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "par,ends",
+    [
+        ("", [[25, 20], [55, 50]]),  # xMidYMid meet: scale 3, centred in x
+        ('preserveAspectRatio="xMinYMax slice"', [[10, -10], [70, 50]]),  # scale 6, bottom-aligned
+        ('preserveAspectRatio="none"', [[10, 20], [70, 50]]),  # 6 × 3
+        ('preserveAspectRatio="xMaxYMin"', [[40, 20], [70, 50]]),
+    ],
+)
+def test_a_nested_viewport_follows_preserve_aspect_ratio(par: str, ends: list[list[float]]) -> None:
+    """A 10 × 10 viewBox in a 60 × 30 viewport at (10, 20): the ends agree with rsvg-convert's rendering."""
+    viewport = f'<svg x="10" y="20" width="60" height="30" viewBox="0 0 10 10" {par}>'
+    (c,) = curves_of(viewport + '<line stroke="red" x2="10" y2="10"/></svg>')
+    np.testing.assert_allclose(c.segments[0].points, user(ends), atol=1e-12)
+
+
+def test_a_symbol_is_fitted_into_the_size_its_use_gives() -> None:
+    """``<symbol viewBox>`` drawn by ``<use width height>`` is scaled into that size (a tester's 10 × 10 pleat on a
+    100 × 100 sheet was drawn a tenth of its size in the corner); without a size the use fills 100 % of the
+    viewport; a use's width/height also size an ``<svg>`` it draws, and a size of 0 draws nothing."""
+    curves = parse_svg_text(
+        svg(
+            '<defs><symbol id="pleat" viewBox="0 0 10 10"><path d="M 5 0 C 3 3 7 7 5 10" stroke="#00f"/></symbol>\n'
+            '<symbol id="wide" viewBox="0 0 20 10" preserveAspectRatio="xMaxYMid meet"><line stroke="red" x2="20" '
+            'y2="10"/></symbol><svg id="box" width="10" height="10" viewBox="0 0 1 1"><line stroke="red" x2="1"/>'
+            "</svg></defs>\n"
+            '<use xlink:href="#pleat" x="0" y="0" width="100" height="100"/>\n'
+            '<use href="#wide" x="5" y="5" width="80" height="80"/><use href="#pleat"/>\n'
+            '<use href="#box" width="40" height="40"/><use href="#pleat" width="0"/>',
+            head=XLINK,
+        ),
+        "symbols.svg",
+    ).curves
+    assert len(curves) == 4
+    np.testing.assert_allclose(curves[0].segments[0].points, user([[50, 0], [30, 30], [70, 70], [50, 100]]))
+    np.testing.assert_allclose(curves[1].segments[0].points, user([[5, 25], [85, 65]]))  # 4×, centred vertically
+    np.testing.assert_allclose(curves[2].segments[0].points, curves[0].segments[0].points)  # 100 % of the sheet
+    np.testing.assert_allclose(curves[3].segments[0].points, user([[0, 0], [40, 0]]))
+    assert curves[0].source == "SVG <path> (line 2) via <use> (line 4)"
+
+
+def test_a_nested_viewport_without_a_size_is_refused_when_its_viewbox_needs_one() -> None:
+    with pytest.raises(PatternError, match=r"SVG <svg id='n'> \(line 2\): its viewBox needs the size of its viewport"):
+        parse_svg_text(svg('<svg id="n" viewBox="0 0 1 1"><line stroke="red" x2="1"/></svg>', head=""), "n.svg")
+
+
 def test_use_that_names_nothing_or_itself_is_skipped_with_a_warning() -> None:
     drawing = parse_svg_text(
         svg(
@@ -610,3 +831,26 @@ def test_nested_uses_cannot_multiply_the_elements_without_bound() -> None:
     with pytest.raises(PatternError, match=r"deep\.svg \(<use> copies included\): number of SVG elements 50,001"):
         parse_svg_text(svg("\n".join(levels), head=XLINK), "deep.svg")
     assert time.perf_counter() - t0 < 5.0
+
+
+# ------------------------------------------------------------------------------------------------ hidden elements
+
+
+def test_hidden_elements_are_not_read_and_a_visible_child_shows_through() -> None:
+    """``visibility`` hidden/collapse (attribute, style or CSS) hides shapes as ``display:none`` does, but it is
+    inherited and a child may say ``visible`` (SVG 1.1 §11.5). A tester's file kept an old version of a crease in a
+    ``<g visibility="hidden">`` and it was folded with the shown one."""
+    d = parse_svg_text(
+        svg(
+            "<style>.gone { visibility: collapse }</style>\n"
+            '<line id="shown" stroke="blue" x1="50" y1="0" x2="50" y2="100"/>\n'
+            '<g id="old" visibility="hidden"><line id="a" stroke="red" x1="0" y1="50" x2="100" y2="50"/>\n'
+            '<line id="back" stroke="red" visibility="visible" x1="0" y1="60" x2="100" y2="60"/></g>\n'
+            '<line id="b" stroke="red" style="visibility:hidden" x1="0" y1="70" x2="100" y2="70"/>\n'
+            '<line id="c" class="gone" stroke="red" x1="0" y1="80" x2="100" y2="80"/>\n'
+            '<g style="visibility:collapse"><g visibility="inherit"><line id="d" stroke="red" x2="1"/></g></g>'
+        ),
+        "v.svg",
+    )
+    assert [c.source for c in d.curves] == ["SVG <line id='shown'> (line 3)", "SVG <line id='back'> (line 5)"]
+    assert d.warnings == []

@@ -9,15 +9,24 @@ What is read:
   reflection, several sub-paths), ``line``, ``polyline``, ``polygon``, ``rect`` (rounded corners become arcs),
   ``circle`` and ``ellipse``; contents of ``defs``/``symbol``/``clipPath``/``mask``/``metadata``/... are skipped;
 * nested ``transform`` lists (``matrix translate scale rotate skewX skewY``), applied innermost first;
+* viewports: a nested ``<svg>`` (``x y width height viewBox preserveAspectRatio``, sizes 100 % by default) and a
+  ``<symbol viewBox>`` drawn by a ``<use width height>`` place and scale their content as the root's viewBox does
+  (nothing is clipped to them);
 * clones: ``<use href="#id">`` (or ``xlink:href``) draws the element it names (a ``<symbol>`` too) moved by its
   ``transform`` then ``x``/``y``, inheriting the use's stroke; a use that names nothing or would draw itself again
   is skipped with a warning, and the copies count against the element limit (nested uses cannot multiply them);
 * the stroke colour, which gives the assignment by EXACT match with Origami Simulator's table (any CSS spelling of
-  those rgb values); ``opacity × stroke-opacity × 180°`` gives the fold angle (mountain negative);
+  those rgb values: keywords, 3/4/6/8-digit hex, ``rgb()``/``rgba()``/``hsl()``/``hsla()`` with commas or spaces,
+  numbers or percentages); ``opacity × stroke-opacity × alpha × 180°`` gives the fold angle (mountain negative),
+  the alpha of the colour (``rgba(255,0,0,0.6)``, ``#ff000099``) counting as stroke-opacity does;
 * presentation attributes < ``<style>`` rules (type, ``.class``, ``#id`` selectors, comma lists) < inline ``style``;
   ``stroke``/``stroke-opacity`` inherit from ancestors, ``opacity`` is the element's own;
+* hidden elements are not read: ``display:none`` (the element and everything in it) and ``visibility`` ``hidden`` or
+  ``collapse`` (inherited, so a child that says ``visible`` is read, as SVG draws it);
 * units: ``viewBox`` with ``width``/``height`` in physical units give the user unit → mm scale; otherwise one user
-  unit is one CSS px = 25.4/96 mm. Points are then mapped (x, y) → (x, −y) so the sheet is y-up in mm.
+  unit is one CSS px = 25.4/96 mm. Shape attributes take user units, CSS absolute lengths (96 px = 1 in, before
+  the viewBox scales them) or percentages of the viewport. Points are then mapped (x, y) → (x, −y) so the sheet
+  is y-up in mm.
 
 Each sub-path (or element) becomes one :class:`~.pattern.CreaseCurve` of exact segments: quadratic Béziers are
 degree-elevated to cubics, elliptical arcs stay arcs (an affine image of an ellipse is recomputed exactly).
@@ -113,8 +122,11 @@ SKIPPED_CONTAINERS = {
 }
 """Elements whose contents never draw creases."""
 
+ANGLE_HINT = "set stroke-opacity (or opacity) to the fold angle / 180° (0.6 for 108°)"
+"""How a stroke gets its fold angle, for the warnings about opacities that give none."""
+
 SHAPES = {"path", "line", "polyline", "polygon", "rect", "circle", "ellipse"}
-INHERITED = ("stroke", "stroke-opacity", "display", "visibility")
+INHERITED = ("stroke", "stroke-opacity", "fill", "display", "visibility")
 
 
 @dataclass
@@ -335,7 +347,7 @@ def _matches(rule: _Rule, elem: _Element) -> bool:
 def _own_style(elem: _Element, rules: list[_Rule]) -> dict[str, str]:
     """The element's own declared properties: attributes < matching CSS rules (by specificity, order) < ``style``."""
     props: dict[str, str] = {}
-    for key in ("stroke", "stroke-opacity", "opacity", "display", "visibility"):
+    for key in ("stroke", "stroke-opacity", "fill", "opacity", "display", "visibility"):
         if key in elem.attrib:
             props[key] = elem.attrib[key].strip()
     for rule in sorted((r for r in rules if _matches(r, elem)), key=lambda r: (r.specificity, r.order)):
@@ -348,56 +360,104 @@ def _own_style(elem: _Element, rules: list[_Rule]) -> dict[str, str]:
 # ----------------------------------------------------------------------------------------------------- colours
 
 
-def _parse_colour(value: str) -> tuple[int, int, int] | None:
-    """An sRGB triple for a CSS colour spelling (hex, keyword, ``rgb()`` with numbers or percentages), else None."""
-    v = value.lower().replace(" ", "")
+_NUMBER_TEXT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_NUMBER = re.compile(_NUMBER_TEXT)
+_QUANTITY = re.compile(rf"({_NUMBER_TEXT})\s*([A-Za-z%]*)")
+"""A number and its unit (letters or ``%``, maybe none), as CSS writes lengths, percentages and angles."""
+
+_HUE_UNITS = {"": 1.0, "deg": 1.0, "grad": 0.9, "rad": 180.0 / math.pi, "turn": 360.0}
+"""Degrees per unit of an ``hsl()`` hue."""
+
+
+def _css_number(text: str, full: float, units: dict[str, float] | None = None) -> float | None:
+    """A finite CSS number (lower case), a percentage of ``full``, or a number with one of ``units`` (value per
+    unit); else None."""
+    m = _QUANTITY.fullmatch(text)
+    if not m or not math.isfinite(x := float(m.group(1))):
+        return None
+    unit = m.group(2)
+    if unit == "%":
+        return x * full / 100.0
+    scale = (units or {"": 1.0}).get(unit)
+    return None if scale is None else x * scale
+
+
+def _colour_arguments(body: str) -> tuple[list[str], str] | None:
+    """The three channels and the alpha ("1" if none) of ``rgb()``/``hsl()`` in the comma syntax ``0, 0, 255, 0.5``
+    or the space syntax of CSS Color 4 ``0 0 255 / 50%``; None if it is neither."""
+    if "," in body:
+        parts = [p.strip() for p in body.split(",")]
+        return (parts[:3], parts[3] if len(parts) == 4 else "1") if len(parts) in (3, 4) and "/" not in body else None
+    channels, slash, alpha = body.partition("/")
+    parts = channels.split()
+    if len(parts) != 3 or (slash and len(alpha.split()) != 1):
+        return None
+    return parts, alpha.strip() if slash else "1"
+
+
+def _hsl_rgb(h: float, s: float, lightness: float) -> tuple[float, float, float]:
+    """sRGB channels (0–255) of an HSL colour, by CSS Color 4's formula (hue in degrees, s and l from 0 to 1)."""
+    s, lightness = min(max(s, 0.0), 1.0), min(max(lightness, 0.0), 1.0)
+    a = s * min(lightness, 1.0 - lightness)
+
+    def channel(n: int) -> float:
+        k = (n + h / 30.0) % 12.0
+        return 255.0 * (lightness - a * max(-1.0, min(k - 3.0, 9.0 - k, 1.0)))
+
+    return channel(0), channel(8), channel(4)
+
+
+def _parse_colour(value: str) -> tuple[tuple[int, int, int], float] | None:
+    """(sRGB triple, alpha) of a CSS colour: keyword, ``#rgb``/``#rgba``/``#rrggbb``/``#rrggbbaa``, ``rgb()``/``rgba()``
+    and ``hsl()``/``hsla()`` in the comma or space syntax, with numbers or percentages; None for anything else or a
+    colour whose channels are not whole numbers (it cannot match the table exactly)."""
+    v = value.strip().lower()
     if v in NAMED_COLOURS:
-        return NAMED_COLOURS[v]
+        return NAMED_COLOURS[v], 1.0
     if v.startswith("#"):
         h = v[1:]
-        if len(h) in (3, 4) and all(c in "0123456789abcdef" for c in h):
-            if len(h) == 4 and h[3] != "f":
-                return None
-            return tuple(int(c * 2, 16) for c in h[:3])  # type: ignore[return-value]
-        if len(h) in (6, 8) and all(c in "0123456789abcdef" for c in h):
-            if len(h) == 8 and h[6:] != "ff":
-                return None
-            return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16))
-        return None
-    m = re.fullmatch(r"rgba?\(([^)]*)\)", v)
-    if m:
-        parts = m.group(1).split(",")
-        if len(parts) not in (3, 4):
+        if len(h) not in (3, 4, 6, 8) or any(c not in "0123456789abcdef" for c in h):
             return None
-        if len(parts) == 4:
-            try:
-                alpha = float(parts[3][:-1]) / 100 if parts[3].endswith("%") else float(parts[3])
-            except ValueError:
-                return None
-            if alpha != 1.0:
-                return None
-        rgb = []
-        for p in parts[:3]:
-            try:
-                x = float(p[:-1]) * 2.55 if p.endswith("%") else float(p)
-            except ValueError:
-                return None
-            if abs(x - round(x)) > 1e-6:
-                return None
-            rgb.append(int(round(x)))
-        return tuple(rgb)  # type: ignore[return-value]
-    return None
+        pairs = [c * 2 for c in h] if len(h) < 6 else [h[i : i + 2] for i in range(0, len(h), 2)]
+        channels = [int(p, 16) for p in pairs]
+        return (channels[0], channels[1], channels[2]), (channels[3] / 255.0 if len(channels) == 4 else 1.0)
+    m = re.fullmatch(r"(rgba?|hsla?)\(([^()]*)\)", v)
+    args = _colour_arguments(m.group(2)) if m else None
+    if m is None or args is None:
+        return None
+    (c1, c2, c3), alpha_text = args
+    alpha = _css_number(alpha_text, 1.0)
+    if m.group(1).startswith("rgb"):
+        rgb = [_css_number(c, 255.0) for c in (c1, c2, c3)]
+    else:
+        hsl = (_css_number(c1, 360.0, _HUE_UNITS), _css_number(c2, 1.0), _css_number(c3, 1.0))
+        rgb = list(_hsl_rgb(*hsl)) if None not in hsl else [None]  # type: ignore[arg-type]
+    if alpha is None or None in rgb or any(abs(x - round(x)) > 1e-6 for x in rgb):  # type: ignore[operator, arg-type]
+        return None
+    r, g, b = (int(round(x)) for x in rgb)  # type: ignore[arg-type]
+    return (r, g, b), min(max(alpha, 0.0), 1.0)
+
+
+def stroke_role(value: str | None) -> tuple[str, float] | None:
+    """(FOLD assignment, alpha) of a stroke value by Origami Simulator's exact colour table, or None if it is not one.
+
+    The alpha of a colour with one (``rgba(255, 0, 0, 0.6)``, ``#ff000099``) is read as ``stroke-opacity`` is: it
+    multiplies the fold angle, as a renderer multiplies it into the stroke's opacity."""
+    if value is None:
+        return None
+    v = value.strip().lower()
+    if v in LITERAL_ASSIGNMENTS:
+        return LITERAL_ASSIGNMENTS[v], 1.0
+    colour = _parse_colour(v)
+    if colour is None or colour[0] not in ASSIGNMENT_RGB:
+        return None
+    return ASSIGNMENT_RGB[colour[0]], colour[1]
 
 
 def stroke_assignment(value: str | None) -> str | None:
     """FOLD assignment for a stroke value by Origami Simulator's exact colour table, or None if it is not one."""
-    if value is None:
-        return None
-    v = value.strip().lower().replace(" ", "")
-    if v in LITERAL_ASSIGNMENTS:
-        return LITERAL_ASSIGNMENTS[v]
-    rgb = _parse_colour(v)
-    return ASSIGNMENT_RGB.get(rgb) if rgb is not None else None
+    role = stroke_role(value)
+    return role[0] if role is not None else None
 
 
 def _parse_opacity(value: str | None, what: str, where: str) -> float:
@@ -417,7 +477,6 @@ def _parse_opacity(value: str | None, what: str, where: str) -> float:
 
 
 _TRANSFORM = re.compile(r"\s*(matrix|translate|scale|rotate|skewX|skewY)\s*\(([^)]*)\)\s*,?", re.I)
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 def parse_transform(value: str, where: str = "transform") -> np.ndarray:
@@ -750,17 +809,79 @@ def _to_segment(raw: _Raw, m: np.ndarray) -> CurveSegment:
     return CurveSegment("arc", ends, _transform_arc(m, raw[3]))
 
 
-def _attr_float(elem: _Element, name: str, where: str, default: float | None = 0.0) -> float:
+USER_UNITS = {unit: mm / PX_MM for unit, mm in UNIT_MM.items()}
+"""User units per unit of an absolute length on a shape's attribute: a user unit is a CSS px (1/96 in) whatever
+the viewBox does after (SVG 1.1 §7.10), as :func:`_viewport` takes it for a root without a viewBox."""
+
+RELATIVE_UNITS = ("em", "ex", "ch", "rem", "vw", "vh", "vmin", "vmax")
+"""CSS units relative to a font or a browser window: nothing in a crease pattern gives their size."""
+
+_AXIS = {
+    "x": 0,
+    "x1": 0,
+    "x2": 0,
+    "cx": 0,
+    "width": 0,
+    "rx": 0,
+    "y": 1,
+    "y1": 1,
+    "y2": 1,
+    "cy": 1,
+    "height": 1,
+    "ry": 1,
+}
+"""Which viewport side a percentage of each attribute is of (SVG 1.1 §7.10); others (``r``) take the diagonal."""
+
+
+def _unit_scale(elem: _Element, matrix: np.ndarray) -> float | None:
+    """How many times the size they say an element's lengths in physical units (mm, cm, in, pt, pc, Q) are drawn,
+    when that is not 1: they are CSS lengths of 96 px to the inch, and a viewBox or a transform may make a user
+    unit other than a px (``x1="50mm"`` in a 100 mm sheet with ``viewBox="0 0 100 100"`` lands 189 mm down)."""
+    units = [m.group(2).lower() for n in (*_AXIS, "r") if (m := _QUANTITY.fullmatch(elem.attrib.get(n, "").strip()))]
+    if not any(u in USER_UNITS and u not in ("", "px") for u in units):
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        ratio = math.sqrt(abs(float(np.linalg.det(matrix[:2, :2])))) / PX_MM
+    return ratio if math.isfinite(ratio) and abs(ratio - 1.0) > 0.01 else None
+
+
+def _percent_of(box: tuple[float, float] | None, name: str, where: str, shown: str) -> float:
+    """What 100 % of attribute ``name`` is in a viewport of ``box`` (width, height in user units)."""
+    if box is None:
+        raise PatternError(
+            f"{where}: attribute {name}={shown!r} is a percentage of the viewport, whose size the file does not give "
+            "(give the <svg> a viewBox, or a width and height)"
+        )
+    axis = _AXIS.get(name)
+    return box[axis] if axis is not None else math.hypot(*box) / math.sqrt(2.0)
+
+
+def _attr_float(
+    elem: _Element, name: str, where: str, default: float | None = 0.0, box: tuple[float, float] | None = None
+) -> float:
+    """Attribute ``name`` as a length in user units: a number, an absolute length (px, mm, cm, in, pt, pc, Q) or a
+    percentage of the viewport ``box`` (None: the file gives no size); ``default`` when it is absent."""
     value = elem.attrib.get(name)
     if value is None or value.strip() == "":
         if default is None:
             raise PatternError(f"{where}: missing attribute {name}")
         return default
-    m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)(?:\s*px)?", value.strip())
-    if not m:
-        shown = value if len(value) <= 40 else value[:37] + "..."
-        raise PatternError(f"{where}: attribute {name}={shown!r} is not a number in user units")
-    return float(m.group(1))
+    shown = value if len(value) <= 40 else value[:37] + "..."
+    m = _QUANTITY.fullmatch(value.strip())
+    unit = m.group(2).lower() if m else ""
+    if m and unit in USER_UNITS:
+        return float(m.group(1)) * USER_UNITS[unit]
+    if m and unit == "%":
+        return float(m.group(1)) / 100.0 * _percent_of(box, name, where, shown)
+    if m and unit in RELATIVE_UNITS:
+        raise PatternError(
+            f"{where}: attribute {name}={shown!r} is in {unit}, a unit relative to a font or window that a crease "
+            "pattern does not give: use user units or px, mm, cm, in, pt, pc, Q"
+        )
+    raise PatternError(
+        f"{where}: attribute {name}={shown!r} is not a number (a length in user units, or with px, mm, cm, in, pt, "
+        "pc, Q or %)"
+    )
 
 
 def _points_attr(elem: _Element, where: str) -> np.ndarray:
@@ -783,14 +904,21 @@ def _ellipse_arcs(cx: float, cy: float, rx: float, ry: float) -> list[_Raw]:
     ]
 
 
-def _shape_subpaths(elem: _Element, where: str, budget: int | None = None) -> list[tuple[list[_Raw], bool]]:
-    """Raw sub-paths (user units) of one shape element (a path of more than ``budget`` commands raises)."""
+def _shape_subpaths(
+    elem: _Element, where: str, budget: int | None = None, box: tuple[float, float] | None = None
+) -> list[tuple[list[_Raw], bool]]:
+    """Raw sub-paths (user units) of one shape element (a path of more than ``budget`` commands raises; ``box``:
+    the viewport's size in user units, for percentages)."""
     tag = elem.tag
+
+    def attr(name: str) -> float:
+        return _attr_float(elem, name, where, box=box)
+
     if tag == "path":
         return parse_path_data(elem.attrib.get("d", ""), where, budget)
     if tag == "line":
-        p0 = np.array([_attr_float(elem, "x1", where), _attr_float(elem, "y1", where)])
-        p1 = np.array([_attr_float(elem, "x2", where), _attr_float(elem, "y2", where)])
+        p0 = np.array([attr("x1"), attr("y1")])
+        p1 = np.array([attr("x2"), attr("y2")])
         return [([("line", p0, p1)], False)]
     if tag in ("polyline", "polygon"):
         pts = _points_attr(elem, where)
@@ -802,13 +930,13 @@ def _shape_subpaths(elem: _Element, where: str, budget: int | None = None) -> li
             segs.append(("line", pts[-1], pts[0]))
         return [(segs, closed)] if segs else []
     if tag == "rect":
-        x, y = _attr_float(elem, "x", where), _attr_float(elem, "y", where)
-        w, h = _attr_float(elem, "width", where), _attr_float(elem, "height", where)
+        x, y = attr("x"), attr("y")
+        w, h = attr("width"), attr("height")
         if w <= 0 or h <= 0:
             return []
         rx_s, ry_s = elem.attrib.get("rx"), elem.attrib.get("ry")
-        rx = _attr_float(elem, "rx", where) if rx_s not in (None, "", "auto") else None
-        ry = _attr_float(elem, "ry", where) if ry_s not in (None, "", "auto") else None
+        rx = attr("rx") if rx_s not in (None, "", "auto") else None
+        ry = attr("ry") if ry_s not in (None, "", "auto") else None
         if rx is None and ry is None:
             rx = ry = 0.0
         elif rx is None:
@@ -846,15 +974,15 @@ def _shape_subpaths(elem: _Element, where: str, budget: int | None = None) -> li
         segs.append(("arc", pts["l1"], pts["t0"], (x + rx, y + ry, rx, ry, 0.0, math.pi, hp)))
         return [(segs, True)]
     if tag == "circle":
-        r = _attr_float(elem, "r", where)
+        r = attr("r")
         if r <= 0:
             return []
-        return [(_ellipse_arcs(_attr_float(elem, "cx", where), _attr_float(elem, "cy", where), r, r), True)]
+        return [(_ellipse_arcs(attr("cx"), attr("cy"), r, r), True)]
     if tag == "ellipse":
-        rx, ry = _attr_float(elem, "rx", where), _attr_float(elem, "ry", where)
+        rx, ry = attr("rx"), attr("ry")
         if rx <= 0 or ry <= 0:
             return []
-        return [(_ellipse_arcs(_attr_float(elem, "cx", where), _attr_float(elem, "cy", where), rx, ry), True)]
+        return [(_ellipse_arcs(attr("cx"), attr("cy"), rx, ry), True)]
     return []
 
 
@@ -865,7 +993,7 @@ def _length_mm(value: str | None) -> tuple[float | None, bool]:
     """(millimetres, has a physical unit) for a width/height value; (None, False) if absent or a percentage."""
     if value is None:
         return None, False
-    m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z%]*)", value.strip())
+    m = _QUANTITY.fullmatch(value.strip())
     if not m:
         return None, False
     unit = m.group(2).lower()
@@ -874,47 +1002,94 @@ def _length_mm(value: str | None) -> tuple[float | None, bool]:
     return float(m.group(1)) * UNIT_MM[unit], unit not in ("", "px")
 
 
-def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float]:
-    """User units → mm (y up) as a 3×3 matrix, and the viewport's width and height in mm.
+def _viewbox(elem: _Element, where: str) -> tuple[float, float, float, float] | None:
+    """An element's ``viewBox`` (x, y, width, height), None without one; refused unless the size is positive."""
+    vb = elem.attrib.get("viewBox")
+    if vb is None or not vb.strip():
+        return None
+    nums = [float(x) for x in _NUMBER.findall(vb)]
+    if len(nums) != 4 or not (nums[2] > 0 and nums[3] > 0) or not all(map(math.isfinite, nums)):
+        raise PatternError(f"{where}: viewBox {vb!r} must be four numbers with positive width and height")
+    return nums[0], nums[1], nums[2], nums[3]
 
-    With a ``viewBox`` the user box is fitted into ``width × height`` following ``preserveAspectRatio`` (default
-    ``xMidYMid meet``; ``none`` scales each axis on its own). Missing ``width``/``height`` fall back to the viewBox
-    size in px. The result ends with the flip (x, y) → (x, −y).
+
+def _fit(vbox: tuple[float, float, float, float], par: str | None, width: float, height: float) -> np.ndarray:
+    """3×3 matrix that fits the user box ``vbox`` into a ``width × height`` viewport at the origin, following
+    ``preserveAspectRatio`` ``par`` (SVG 1.1 §7.8; default ``xMidYMid meet``, ``none`` scales each axis on its own)."""
+    vx, vy, vw, vh = vbox
+    sx, sy = width / vw, height / vh
+    words = (par or "").split()
+    if words[:1] == ["defer"]:  # only meaningful on <image>
+        words = words[1:]
+    align = words[0] if words else "xMidYMid"
+    tx = ty = 0.0
+    if align != "none":
+        s = max(sx, sy) if words[1:2] == ["slice"] else min(sx, sy)
+        fx = {"xMin": 0.0, "xMid": 0.5, "xMax": 1.0}.get(align[:4], 0.5)
+        fy = {"YMin": 0.0, "YMid": 0.5, "YMax": 1.0}.get(align[4:], 0.5)
+        tx, ty = fx * (width - vw * s), fy * (height - vh * s)
+        sx = sy = s
+    return np.array([[sx, 0.0, tx - vx * sx], [0.0, sy, ty - vy * sy], [0.0, 0.0, 1.0]])
+
+
+def _nested_viewport(
+    elem: _Element, use: _Element | None, box: tuple[float, float] | None, where: str
+) -> tuple[np.ndarray, tuple[float, float] | None] | None:
+    """The viewport of a nested ``<svg>`` or of a ``<symbol>`` (or ``<svg>``) drawn by ``use`` (SVG 1.1 §7.9, §5.6):
+    the matrix from its user units to its parent's, and its viewport's size in its own user units (None: unknown).
+
+    ``x``/``y`` place it; ``width``/``height`` (the use's, where it gives them; default 100 % of the parent's
+    viewport ``box``) size it; its ``viewBox`` is fitted in as the root's is (:func:`_fit`). None when the viewport
+    is empty (a width or height of 0 draws nothing). Clipping to the viewport is not done."""
+    sizes: list[float | None] = []
+    for name in ("width", "height"):
+        source = use if use is not None and use.attrib.get(name, "").strip() not in ("", "auto") else elem
+        if source.attrib.get(name, "").strip() in ("", "auto"):
+            sizes.append(None if box is None else box[_AXIS[name]])
+        else:
+            sizes.append(_attr_float(source, name, where if source is elem else _describe(source), box=box))
+    width, height = sizes
+    if (width is not None and width <= 0) or (height is not None and height <= 0):
+        return None
+    x, y = _attr_float(elem, "x", where, box=box), _attr_float(elem, "y", where, box=box)
+    shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
+    vbox = _viewbox(elem, where)
+    if vbox is None:
+        return shift, (width, height) if width is not None and height is not None else None
+    if width is None or height is None:
+        raise PatternError(
+            f"{where}: its viewBox needs the size of its viewport, which the file does not give: give it (or the <use> "
+            "that draws it) a width and height"
+        )
+    return shift @ _fit(vbox, elem.attrib.get("preserveAspectRatio"), width, height), (vbox[2], vbox[3])
+
+
+def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float, tuple[float, float] | None]:
+    """User units → mm (y up) as a 3×3 matrix, the viewport's width and height in mm, and its size in user units
+    (what percentages are of; None when the file gives no size).
+
+    With a ``viewBox`` the user box is fitted into ``width × height`` (:func:`_fit`). Missing ``width``/``height``
+    fall back to the viewBox size in px. Without one, a user unit is a px. The result ends with the flip
+    (x, y) → (x, −y).
     """
     w_mm, _ = _length_mm(root.attrib.get("width"))
     h_mm, _ = _length_mm(root.attrib.get("height"))
-    vb = root.attrib.get("viewBox")
-    m = np.eye(3)
-    if vb is not None and vb.strip():
-        nums = [float(x) for x in _NUMBER.findall(vb)]
-        if len(nums) != 4 or nums[2] <= 0 or nums[3] <= 0:
-            raise PatternError(f"{where}: viewBox {vb!r} must be four numbers with positive width and height")
-        vx, vy, vw, vh = nums
+    vbox = _viewbox(root, where)
+    if vbox is not None:
+        vw, vh = vbox[2], vbox[3]
         if w_mm is None and h_mm is None:
             w_mm, h_mm = vw * PX_MM, vh * PX_MM
         elif w_mm is None:
             w_mm = h_mm * vw / vh
         elif h_mm is None:
             h_mm = w_mm * vh / vw
-        sx, sy = w_mm / vw, h_mm / vh
-        par = root.attrib.get("preserveAspectRatio", "xMidYMid meet").split()
-        align = par[0] if par else "xMidYMid"
-        tx = ty = 0.0
-        if align != "none":
-            slice_ = len(par) > 1 and par[1] == "slice"
-            s = max(sx, sy) if slice_ else min(sx, sy)
-            fx = {"xMin": 0.0, "xMid": 0.5, "xMax": 1.0}.get(align[:4], 0.5)
-            fy = {"YMin": 0.0, "YMid": 0.5, "YMax": 1.0}.get(align[4:], 0.5)
-            tx, ty = fx * (w_mm - vw * s), fy * (h_mm - vh * s)
-            sx = sy = s
-        m = np.array([[sx, 0.0, tx - vx * sx], [0.0, sy, ty - vy * sy], [0.0, 0.0, 1.0]])
+        m = _fit(vbox, root.attrib.get("preserveAspectRatio"), w_mm, h_mm)
+        box: tuple[float, float] | None = (vw, vh)
     else:
         m = np.diag([PX_MM, PX_MM, 1.0])
-        if w_mm is None or h_mm is None:
-            w_mm = w_mm or 0.0
-            h_mm = h_mm or 0.0
+        box = (w_mm / PX_MM, h_mm / PX_MM) if w_mm is not None and h_mm is not None else None
     flip = np.diag([1.0, -1.0, 1.0])
-    return flip @ m, float(w_mm or 0.0), float(h_mm or 0.0)
+    return flip @ m, float(w_mm or 0.0), float(h_mm or 0.0), box
 
 
 # ----------------------------------------------------------------------------------------------------- reading
@@ -941,10 +1116,239 @@ def _lines(lines: list[int]) -> str:
     return f"line {shown}" if len(lines) == 1 else f"lines {shown}"
 
 
+def _no_stroke(stroke: str | None) -> bool:
+    """Whether a shape draws no line: no ``stroke`` (SVG's default is none), ``none`` or ``transparent``."""
+    return stroke is None or stroke.strip().lower() in ("none", "transparent", "")
+
+
+def _fold_angle(assignment: str, opacity: float) -> float | None:
+    """A stroke's fold angle from its total opacity (``opacity × stroke-opacity × alpha``): ∓180° × opacity for a
+    mountain/valley (None, "no angle given", at 0, so ``--angle`` can fill it), 0° for a facet, None otherwise."""
+    if assignment in ("M", "V") and opacity != 0.0:
+        return (-180.0 if assignment == "M" else 180.0) * opacity
+    return 0.0 if assignment == "F" else None
+
+
+def _invisible(style: dict[str, str]) -> bool:
+    """Whether a shape's inherited ``visibility`` hides it (``hidden``/``collapse``; a child may say ``visible``).
+
+    Unlike ``display:none`` the property is inherited and only hides the shapes themselves, so it is read where a
+    shape is drawn, not where a group starts: that is what lets a visible child show through a hidden group."""
+    return style.get("visibility", "").strip().lower() in ("hidden", "collapse")
+
+
+def _names(items: list[str], limit: int = 4, sep: str = ", ") -> str:
+    """The first ``limit`` of ``items`` joined, and how many more there are."""
+    return sep.join(items[:limit]) + (f" and {len(items) - limit} more" if len(items) > limit else "")
+
+
+def _group_opacity(own: dict[str, str]) -> float | None:
+    """A container's own ``opacity`` when it is below 1, else None (unreadable values too: it is never used)."""
+    try:
+        opacity = _parse_opacity(own.get("opacity"), "opacity", "")
+    except PatternError:
+        return None
+    return opacity if opacity < 1.0 else None
+
+
 def _describe(elem: _Element) -> str:
     ident = elem.attrib.get("id")
     tag = f"<{elem.tag} id='{ident}'>" if ident else f"<{elem.tag}>"
     return f"SVG {tag} (line {elem.line})"
+
+
+@dataclass(frozen=True)
+class _Place:
+    """How an element is drawn: its user units → mm (y up) matrix, the properties it inherits, the ``<use>``
+    elements it is drawn through, innermost last (none for the element in its own place), the groups around it
+    with an opacity of their own (not a fold angle: :meth:`_Reader.warnings` says so) and the size of its viewport
+    (for percentages)."""
+
+    matrix: np.ndarray
+    style: dict[str, str]
+    via: tuple[_Element, ...] = ()
+    faded: tuple[str, ...] = ()  # the groups around it whose own opacity is below 1 (their descriptions)
+    box: tuple[float, float] | None = None  # its viewport's width and height in its user units (None: not given)
+
+
+class _Reader:
+    """One document's walk: every visible shape with a role colour becomes crease curves; what is skipped is kept
+    for one warning a kind (:meth:`warnings`). The tree is walked with an explicit stack (``todo``), not recursion."""
+
+    def __init__(self, root: _Element, source_name: str, warnings: list[str]) -> None:
+        self.root, self.source_name = root, source_name
+        self.rules: list[_Rule] = []
+        self.ids: dict[str, _Element] = {}  # the targets of <use> (the first element of each id, as browsers take it)
+        self.parents: dict[int, _Element] = {}  # id(element) → its parent, to refuse a <use> inside what it names
+        self._index(warnings)
+        self.curves: list[CreaseCurve] = []
+        self.unknown: dict[str, list[int]] = {}  # stroke as written → lines
+        self.filled: list[str] = []  # shapes without a stroke, filled in a role colour: perhaps meant as the sheet
+        self.unresolved: list[int] = []  # lines of <use> elements whose href names no element
+        self.cycles: list[int] = []  # lines of <use> elements that would draw themselves again
+        self.rescaled: list[str] = []  # shapes whose lengths in mm, in, ... are drawn at another size than they say
+        self.flat: list[str] = []  # mountains and valleys whose opacity gives 0°
+        self.group_opacity: dict[str, list[float]] = {}  # group → [its opacity, creases in it]
+        self.segment_budget = limits.PATH_SEGMENTS.value
+        self.visits_left = limits.SVG_ELEMENTS.value  # elements drawn, clones included: nested <use> cannot multiply
+        self.todo: list[tuple[_Element, _Place]] = []
+
+    def _index(self, warnings: list[str]) -> None:
+        """Ids, parents and ``<style>`` rules of the whole document, in document order."""
+        pending = [self.root]  # explicit stack (nesting depth is bounded by limits.NESTING anyway)
+        while pending:
+            elem = pending.pop()
+            if "id" in elem.attrib:
+                self.ids.setdefault(elem.attrib["id"], elem)
+            for child in elem.children:
+                self.parents[id(child)] = elem
+            if elem.tag == "style":
+                where = f"{self.source_name} <style> (line {elem.line})"
+                self.rules.extend(_parse_stylesheet(elem.text, warnings, where))
+            pending.extend(reversed(elem.children))
+        for i, r in enumerate(self.rules):
+            r.order = i
+
+    def read(self, place: _Place) -> None:
+        """Draw the document from its root, placed by ``place``."""
+        self.todo.append((self.root, place))
+        while self.todo:
+            self.visit(*self.todo.pop())
+
+    def visit(self, elem: _Element, place: _Place) -> None:
+        """Read one element; its children (or the element a ``<use>`` names) go on ``todo``."""
+        via = place.via
+        used = bool(via) and elem is self.ids.get(_href(via[-1]))  # the target of a <use>: a <symbol> is drawn there
+        if elem.tag.startswith("#foreign:") or (elem.tag in SKIPPED_CONTAINERS and not (used and elem.tag == "symbol")):
+            return
+        self.visits_left -= 1
+        if self.visits_left < 0:
+            limits.SVG_ELEMENTS.check(
+                limits.SVG_ELEMENTS.value - self.visits_left, f"{self.source_name} (<use> copies included)"
+            )
+        where = _describe(elem) + "".join(f" via <use> (line {u.line})" for u in reversed(via))
+        own = _own_style(elem, self.rules)
+        style = dict(place.style)
+        for key in INHERITED:
+            if key in own and own[key].lower() != "inherit":
+                style[key] = own[key]
+        if own.get("display", "").lower() == "none":
+            return
+        matrix = place.matrix
+        if "transform" in elem.attrib:
+            value = elem.attrib["transform"]
+            matrix = compose(matrix, parse_transform(value, where), where, value)
+        faded, box = place.faded, place.box
+        if elem.tag not in SHAPES and (opacity := _group_opacity(own)) is not None:
+            self.group_opacity[where] = [opacity, 0]
+            faded = (*faded, where)
+        if elem.tag in ("svg", "symbol") and elem is not self.root:  # a viewport of its own
+            nested = _nested_viewport(elem, via[-1] if used else None, box, where)
+            if nested is None:
+                return
+            matrix, box = compose(matrix, nested[0], where, "its viewport"), nested[1]
+        place = _Place(matrix, style, via, faded, box)
+        if elem.tag == "use":
+            self._use(elem, place, where)
+        elif elem.tag in SHAPES:
+            self._shape(elem, place, own, where)
+        else:
+            self.todo.extend((child, place) for child in reversed(elem.children))
+
+    def _use(self, elem: _Element, place: _Place, where: str) -> None:
+        """A clone (Inkscape's Edit ▸ Clone): the element it names, moved by x, y, unless it names nothing or would
+        draw itself again."""
+        target = self.ids.get(_href(elem))
+        if target is None:
+            self.unresolved.append(elem.line)
+        elif any(target is a for u in (elem, *place.via) for a in _self_and_ancestors(u, self.parents)):
+            self.cycles.append(elem.line)
+        else:
+            x, y = _attr_float(elem, "x", where, box=place.box), _attr_float(elem, "y", where, box=place.box)
+            shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
+            matrix = compose(place.matrix, shift, where, f"x={x:g} y={y:g}")
+            self.todo.append((target, _Place(matrix, place.style, (*place.via, elem), place.faded, place.box)))
+
+    def _shape(self, elem: _Element, place: _Place, own: dict[str, str], where: str) -> None:
+        """A visible shape: crease curves if its stroke has a role colour, else noted for a warning."""
+        style = place.style
+        if _invisible(style):
+            return
+        stroke = style.get("stroke")
+        role = stroke_role(stroke)
+        subpaths = _shape_subpaths(elem, where, self.segment_budget, place.box)
+        ratio = _unit_scale(elem, place.matrix)
+        if ratio is not None:
+            self.rescaled.append(f"{where} (drawn {ratio:.3g}× the size written)")
+        self.segment_budget -= sum(len(segs) for segs, _ in subpaths)
+        if self.segment_budget < 0:
+            limits.PATH_SEGMENTS.check(
+                limits.PATH_SEGMENTS.value - self.segment_budget, f"{self.source_name} ({where})"
+            )
+        if not subpaths:
+            return
+        if _no_stroke(stroke):  # not drawn as a line, so not a crease (LibreOffice's bounding boxes)
+            if elem.tag != "line" and stroke_role(style.get("fill", "black")) is not None:
+                self.filled.append(where)
+            return
+        if role is None:
+            self.unknown.setdefault((stroke or "").strip(), []).append(elem.line)  # as written
+            return
+        assignment, alpha = role
+        opacity = _parse_opacity(own.get("opacity"), "opacity", where)
+        stroke_opacity = _parse_opacity(style.get("stroke-opacity"), "stroke-opacity", where)
+        angle = _fold_angle(assignment, opacity * stroke_opacity * alpha)
+        if assignment in ("M", "V"):
+            for group in place.faded:
+                self.group_opacity[group][1] += 1
+            if angle is None:
+                self.flat.append(where)
+        for k, (raw_segs, closed) in enumerate(subpaths):
+            source = where if len(subpaths) == 1 else f"{where} subpath {k + 1}"
+            segments = [_to_segment(r, place.matrix) for r in raw_segs]
+            self.curves.append(CreaseCurve(segments, assignment, angle, closed=closed, source=source))
+
+    def warnings(self) -> list[str]:
+        """One line for each kind of element skipped."""
+        out: list[str] = []
+        name = self.source_name
+        if self.unknown:
+            parts = []
+            for colour, lines in self.unknown.items():
+                shown = ", ".join(str(x) for x in lines[:8]) + (", ..." if len(lines) > 8 else "")
+                noun = "element" if len(lines) == 1 else "elements"
+                label = "lines" if len(lines) > 1 else "line"
+                parts.append(f"{colour} ({len(lines)} {noun}: {label} {shown})")
+            out.append(f"{name}: unknown stroke colours (elements skipped): " + ", ".join(parts))
+        if self.filled:
+            out.append(
+                f"{name}: {len(self.filled)} filled shape(s) without a stroke skipped (only strokes are read; to make "
+                f"one the sheet's outline, give it a black stroke): {_names(self.filled)}"
+            )
+        if self.rescaled:
+            out.append(
+                f"{name}: lengths with units on shapes are CSS lengths (96 px, that is 96 user units, to the inch), "
+                f"which this file's viewBox or transforms draw at another size, as browsers do: {_names(self.rescaled)}"
+                "; write them without units to mean the file's own units"
+            )
+        if self.flat:
+            out.append(
+                f"{name}: {len(self.flat)} crease(s) with opacity 0 fold by 0° and stay flat: {_names(self.flat)}; "
+                f"{ANGLE_HINT}, or give creases without an angle one with --angle (command line)"
+            )
+        held = [f"{g} has opacity {o:g} around {int(n)} crease(s)" for g, (o, n) in self.group_opacity.items() if n]
+        if held:
+            out.append(
+                f"{name}: a group's opacity is not read as a fold angle: {_names(held, sep='; ')}; its creases fold "
+                f"by their own strokes' opacity (180° when full): {ANGLE_HINT} on each stroke"
+            )
+        if self.unresolved:
+            out.append(
+                f"{name}: <use> elements that name no element of the file are skipped ({_lines(self.unresolved)})"
+            )
+        if self.cycles:
+            out.append(f"{name}: <use> elements that would draw themselves again are skipped ({_lines(self.cycles)})")
+        return out
 
 
 def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
@@ -953,119 +1357,17 @@ def parse_svg_text(text: str | bytes, source_name: str = "<svg>") -> SvgDrawing:
     if root.tag != "svg":
         raise PatternError(f"{source_name}: not an SVG file (root element is <{root.tag}>, line {root.line})")
     warnings: list[str] = []
-    rules: list[_Rule] = []
-
-    ids: dict[str, _Element] = {}  # the targets of <use> (the first element of each id, as browsers take it)
-    parents: dict[int, _Element] = {}  # id(element) → its parent, to refuse a <use> inside what it names
-    pending = [root]  # document order, with an explicit stack (nesting depth is bounded by limits.NESTING anyway)
-    while pending:
-        elem = pending.pop()
-        if "id" in elem.attrib:
-            ids.setdefault(elem.attrib["id"], elem)
-        for child in elem.children:
-            parents[id(child)] = elem
-        if elem.tag == "style":
-            rules.extend(_parse_stylesheet(elem.text, warnings, f"{source_name} <style> (line {elem.line})"))
-        pending.extend(reversed(elem.children))
-    for i, r in enumerate(rules):
-        r.order = i
-    viewport, width_mm, height_mm = _viewport(root, source_name)
-    curves: list[CreaseCurve] = []
-    unknown: dict[str, list[int]] = {}
-    unresolved: list[int] = []  # lines of <use> elements whose href names no element
-    cycles: list[int] = []  # lines of <use> elements that would draw themselves again
-    segment_budget = limits.PATH_SEGMENTS.value
-    visits_left = limits.SVG_ELEMENTS.value  # elements drawn, clones included: nested <use> cannot multiply them
-
-    def visit(elem: _Element, matrix: np.ndarray, inherited: dict[str, str], via: tuple[_Element, ...] = ()) -> None:
-        """Read one element; its children go on ``todo`` (an explicit stack, not recursion). ``via``: the <use>
-        elements this copy is drawn through, innermost last (none for the element in its own place)."""
-        nonlocal segment_budget, visits_left
-        used = bool(via) and elem is ids.get(_href(via[-1]))  # the target of a <use>: a <symbol> is drawn there
-        if elem.tag.startswith("#foreign:") or (elem.tag in SKIPPED_CONTAINERS and not (used and elem.tag == "symbol")):
-            return
-        visits_left -= 1
-        if visits_left < 0:
-            limits.SVG_ELEMENTS.check(limits.SVG_ELEMENTS.value - visits_left, f"{source_name} (<use> copies included)")
-        where = _describe(elem) + "".join(f" via <use> (line {u.line})" for u in reversed(via))
-        own = _own_style(elem, rules)
-        style = dict(inherited)
-        for key in INHERITED:
-            if key in own and own[key].lower() != "inherit":
-                style[key] = own[key]
-        if own.get("display", "").lower() == "none":
-            return
-        if "transform" in elem.attrib:
-            value = elem.attrib["transform"]
-            matrix = compose(matrix, parse_transform(value, where), where, value)
-        if elem.tag == "use":  # a clone (Inkscape's Edit ▸ Clone): the element it names, moved by x, y
-            target = ids.get(_href(elem))
-            if target is None:
-                unresolved.append(elem.line)
-            elif any(target is a for u in (elem, *via) for a in _self_and_ancestors(u, parents)):
-                cycles.append(elem.line)
-            else:
-                x, y = _attr_float(elem, "x", where), _attr_float(elem, "y", where)
-                shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
-                todo.append((target, compose(matrix, shift, where, f"x={x:g} y={y:g}"), style, (*via, elem)))
-            return
-        if elem.tag in SHAPES:
-            stroke = style.get("stroke")
-            assignment = stroke_assignment(stroke)
-            subpaths = _shape_subpaths(elem, where, segment_budget)
-            segment_budget -= sum(len(segs) for segs, _ in subpaths)
-            if segment_budget < 0:
-                limits.PATH_SEGMENTS.check(limits.PATH_SEGMENTS.value - segment_budget, f"{source_name} ({where})")
-            if not subpaths:
-                return
-            if assignment is None:
-                key = stroke.strip().lower().replace(" ", "") if stroke else "no stroke"
-                unknown.setdefault(key, []).append(elem.line)
-                return
-            opacity = _parse_opacity(own.get("opacity"), "opacity", where)
-            stroke_opacity = _parse_opacity(style.get("stroke-opacity"), "stroke-opacity", where)
-            o = opacity * stroke_opacity
-            if assignment == "M":
-                angle: float | None = -180.0 * o if o != 0.0 else None
-            elif assignment == "V":
-                angle = 180.0 * o if o != 0.0 else None
-            elif assignment == "F":
-                angle = 0.0
-            else:
-                angle = None
-            for k, (raw_segs, closed) in enumerate(subpaths):
-                source = where if len(subpaths) == 1 else f"{where} subpath {k + 1}"
-                segments = [_to_segment(r, matrix) for r in raw_segs]
-                curves.append(CreaseCurve(segments, assignment, angle, closed=closed, source=source))
-            return
-        todo.extend((child, matrix, style, via) for child in reversed(elem.children))
-
-    todo: list[tuple[_Element, np.ndarray, dict[str, str], tuple[_Element, ...]]] = [(root, viewport, {}, ())]
-    while todo:
-        visit(*todo.pop())
-    if unknown:
-        parts = []
-        for colour, lines in unknown.items():
-            shown = ", ".join(str(x) for x in lines[:8]) + (", ..." if len(lines) > 8 else "")
-            noun = "element" if len(lines) == 1 else "elements"
-            label = "lines" if len(lines) > 1 else "line"
-            parts.append(f"{colour} ({len(lines)} {noun}: {label} {shown})")
-        warnings.append(f"{source_name}: unknown stroke colours (elements skipped): " + ", ".join(parts))
-    if unresolved:
-        warnings.append(
-            f"{source_name}: <use> elements that name no element of the file are skipped ({_lines(unresolved)})"
-        )
-    if cycles:
-        warnings.append(
-            f"{source_name}: <use> elements that would draw themselves again are skipped ({_lines(cycles)})"
-        )
-    if not curves:
+    reader = _Reader(root, source_name, warnings)
+    viewport, width_mm, height_mm, box = _viewport(root, source_name)
+    reader.read(_Place(viewport, {}, box=box))
+    warnings += reader.warnings()
+    if not reader.curves:
         raise PatternError(
             f"{source_name}: no usable crease element (path/line/polyline/polygon/rect/circle/ellipse with a stroke "
             "colour from Origami Simulator's table: black border, red mountain, blue valley, green cut, yellow facet, "
             "magenta undriven)"
         )
-    return SvgDrawing(curves, warnings, width_mm, height_mm, source_name)
+    return SvgDrawing(reader.curves, warnings, width_mm, height_mm, source_name)
 
 
 def read_svg(path: str | Path) -> SvgDrawing:

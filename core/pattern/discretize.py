@@ -15,7 +15,9 @@ Steps, in order:
    :data:`SNAP_FACTOR` merge tolerances of an existing vertex snaps to it); zero-length and duplicate segments are
    removed. Candidate pairs come from a uniform grid over the segments' bounding boxes, so the work grows with the
    number of nearby pairs, not with E².
-4. **Outside pieces.** If the border is closed, crease pieces lying outside it (creases drawn slightly past the
+4. **Outside pieces.** Border pieces that are no part of an outline (a black slit from the edge, a black line
+   across or loose inside the sheet) are read as cuts, with a warning naming them (:func:`_stray_border_as_cuts`).
+   If the border is then closed, crease pieces lying outside it (creases drawn slightly past the
    edge of the sheet) are removed, with a warning; a crossing on the border never snaps to a vertex off it, so the
    outline stays where it was drawn. Free ends of creases and cuts that stop just short of the border
    (:data:`SHORT_OF_BORDER_FRACTION`) are reported.
@@ -34,7 +36,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Generator
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -898,6 +900,128 @@ def _remove_duplicates(
     return edges[winners], attrs[winners]
 
 
+def _stray_border_as_cuts(
+    verts: np.ndarray,
+    edges: np.ndarray,
+    attrs: np.ndarray,
+    pieces: _Pieces,
+    sources: list[str],
+    warnings: list[str],
+) -> np.ndarray:
+    """Step 4 (start): black (border) lines inside the sheet, no part of its outline, are read as cuts; one warning
+    names them. Returns ``attrs`` with those edges pointing at cut copies of their pieces (appended to ``pieces``).
+
+    A border is the outline of the sheet and of its holes. A black line from the edge into the sheet (a slit), across
+    it (a packaging crease, drawn dashed black) or loose inside it made the outline look open ("2 loose ends" at the
+    slit's ends), so creases past the edge were not trimmed and the triangulation could not tell paper from outside.
+    A laser-cut designer means such a line as a cut, and a border edge inside the paper is meshed as one anyway.
+    Stray: border pieces that hang off a loop (pruned from its 2-core), loop pieces off its outer boundary (chords),
+    and pieces lying inside an outline without touching it. Border lines outside every outline that touch no loop
+    are an open border and stay as they are."""
+    bi = np.flatnonzero(pieces.assignment[attrs] == "B")
+    be = edges[bi]
+    incident: dict[int, list[int]] = {}  # border vertex → its border edges
+    for k, (a, b) in enumerate(be.tolist()):
+        incident.setdefault(a, []).append(k)
+        incident.setdefault(b, []).append(k)
+    core = _two_core(be, incident)
+    if not core.any():
+        return attrs
+    outline = _outer_boundary(verts, be, core)
+    looped = _joined(be, incident, core)
+    mid = 0.5 * (verts[be[:, 0]] + verts[be[:, 1]])
+    inside = _inside_border(mid, verts[be[outline, 0]], verts[be[outline, 1]])
+    stray = ~outline & (looped | inside)
+    if not stray.any():
+        return attrs
+    named = bi[stray & inside]
+    if len(named):
+        warnings.append(
+            f"black (border) line(s) inside the sheet: {_describe_sources(sources, pieces.polyline[attrs[named]])}; a "
+            "border must be the sheet's outline, so they are read as cuts (draw a cut in green, a crease in red/blue)"
+        )
+    copies = attrs[bi[stray]]
+    new = len(pieces.a) + np.arange(len(copies))
+    for f in fields(pieces):
+        values = getattr(pieces, f.name)
+        setattr(pieces, f.name, np.concatenate([values, values[copies]]))
+    pieces.assignment[new] = "C"
+    pieces.fold_angle[new] = np.nan
+    attrs = attrs.copy()
+    attrs[bi[stray]] = new
+    return attrs
+
+
+def _two_core(e: np.ndarray, incident: dict[int, list[int]]) -> np.ndarray:
+    """Which edges ``e`` (``incident``: vertex → its edges) are left when edges with a free end are pruned again and
+    again: those on closed loops and on the paths between loops (the rest hangs off them or is an open line)."""
+    degree = {v: len(ks) for v, ks in incident.items()}
+    leaves = [v for v, d in degree.items() if d == 1]
+    alive = np.ones(len(e), dtype=bool)
+    while leaves:
+        v = leaves.pop()
+        if degree[v] != 1:
+            continue
+        k = next(k for k in incident[v] if alive[k])
+        alive[k] = False
+        for u in e[k].tolist():
+            degree[u] -= 1
+            if degree[u] == 1:
+                leaves.append(u)
+    return alive
+
+
+def _joined(e: np.ndarray, incident: dict[int, list[int]], core: np.ndarray) -> np.ndarray:
+    """Which edges ``e`` are connected to a ``core`` edge, through other edges (``incident``: vertex → its edges)."""
+    joined = core.copy()
+    stack = np.unique(e[core]).tolist()
+    seen = set(stack)
+    while stack:
+        for k in incident[stack.pop()]:
+            joined[k] = True
+            for u in e[k].tolist():
+                if u not in seen:
+                    seen.add(u)
+                    stack.append(u)
+    return joined
+
+
+def _outer_boundary(verts: np.ndarray, e: np.ndarray, core: np.ndarray) -> np.ndarray:
+    """Which ``core`` edges lie on the outer boundary of their connected group: walked with the outside on the left,
+    from each group's lowest leftmost vertex, turning at every vertex to the next edge clockwise."""
+    around: dict[int, list[tuple[float, int, int]]] = {}  # vertex → (angle, neighbour, edge), counter-clockwise
+    for k in np.flatnonzero(core).tolist():
+        a, b = e[k].tolist()
+        d = verts[b] - verts[a]
+        around.setdefault(a, []).append((math.atan2(d[1], d[0]), b, k))
+        around.setdefault(b, []).append((math.atan2(-d[1], -d[0]), a, k))
+    slot: dict[tuple[int, int], int] = {}
+    for v, lst in around.items():
+        lst.sort()
+        slot.update(((v, u), i) for i, (_, u, _) in enumerate(lst))
+    on = np.zeros(len(e), dtype=bool)
+    reached: set[int] = set()
+    for v0 in sorted(around, key=lambda v: (verts[v, 0], verts[v, 1])):
+        if v0 in reached:
+            continue
+        stack = [v0]
+        reached.add(v0)
+        while stack:
+            for _, u, _ in around[stack.pop()]:
+                if u not in reached:
+                    reached.add(u)
+                    stack.append(u)
+        _, w, k = around[v0][-1]  # the first edge clockwise from due west: the outside is to the west of v0
+        v = v0
+        for _ in range(2 * len(e) + 2):
+            on[k] = True
+            _, nxt, k = around[w][slot[(w, v)] - 1]  # the next edge clockwise from the one we came along
+            v, w = w, nxt
+            if (v, w) == (v0, around[v0][-1][1]):
+                break
+    return on
+
+
 def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnings: list[str]) -> list[CreaseCurve]:
     """Close a border left open at one place: when the border strokes together have exactly two loose ends (ends
     that meet no other border end within ``merge_tolerance``), a straight border stroke joins them, with a warning.
@@ -906,7 +1030,9 @@ def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnin
     fraction of a millimetre, is what the designer sees as the sheet's outline; left open, the border separated no
     paper from outside, so the crease nearest the gap became the sheet's edge and the strip beyond it was dropped.
     Borders open at several places are left as they are (which ends belong together is a guess) and warned about
-    where the segments are clipped."""
+    where the segments are clipped. A black line whose loose end lies on or inside a closed border stroke (a slit
+    from the edge, a line across or inside the sheet) is no gap in the outline: :func:`_stray_border_as_cuts` makes
+    it a cut (closing it drew a straight chord across the sheet that was never drawn)."""
     ends = [
         (k, side, c.segments[0].points[0] if side == 0 else c.segments[-1].points[-1])
         for k, c in enumerate(curves)
@@ -917,7 +1043,7 @@ def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnin
         return curves
     pts = np.array([p for _, _, p in ends], dtype=np.float64)
     loose = [i for i, met in enumerate(_ends_met(pts, merge_tolerance)) if met % 2 == 0]  # odd: joined
-    if len(loose) != 2:
+    if len(loose) != 2 or _on_or_inside_closed_border(pts[loose], curves, SNAP_FACTOR * merge_tolerance).any():
         return curves
     a, b = pts[loose[0]], pts[loose[1]]
     gap = float(np.hypot(*(b - a)))
@@ -933,6 +1059,19 @@ def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnin
         "e.g. Cyclic in Blender, Z in SVG)"
     )
     return [*curves, closing]
+
+
+def _on_or_inside_closed_border(points: np.ndarray, curves: list[CreaseCurve], tol: float) -> np.ndarray:
+    """Which ``points`` lie inside, or within ``tol`` of, a closed border stroke (each sampled as a polygon)."""
+    out = np.zeros(len(points), dtype=bool)
+    for c in curves:
+        if c.assignment != "B" or not c.closed or not c.segments:
+            continue
+        a = np.concatenate([s.evaluate(np.linspace(0.0, 1.0, 65)) for s in c.segments])
+        b = np.roll(a, -1, axis=0)
+        out |= _inside_border(points, a, b)
+        out |= np.array([_point_segment_distance(np.broadcast_to(q, a.shape), a, b).min() <= tol for q in points])
+    return out
 
 
 def _ends_met(pts: np.ndarray, tol: float) -> list[int]:
@@ -961,6 +1100,7 @@ def _clip_to_border(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Step 4: refuse a self-crossing border, warn about an open one, remove crease pieces outside a closed one and
     report crease ends just short of it (:func:`_warn_short_of_border`; ``size``: the sheet's)."""
+    attrs = _stray_border_as_cuts(verts, edges, attrs, pieces, sources, warnings)
     assign, edge_poly = pieces.assignment, pieces.polyline
     is_b = assign[attrs] == "B"
     if not is_b.any():

@@ -128,6 +128,14 @@ def _update_role(self: "CurvedFoldObjectProperties", context: bpy.types.Context)
         show_role(ob)
 
 
+def _update_angle(self: "CurvedFoldObjectProperties", context: bpy.types.Context) -> None:
+    """Tag the object as updated: a Python property changes no Blender data by itself, so without this the
+    depsgraph handlers (Live re-fold, the out-of-date notice of :mod:`.source_state`) would not see a new angle."""
+    ob = self.id_data
+    if isinstance(ob, bpy.types.Object):
+        ob.update_tag()
+
+
 class CurvedFoldObjectProperties(bpy.types.PropertyGroup):
     """Crease settings of one curve object (``Object.curved_fold``)."""
 
@@ -149,6 +157,7 @@ class CurvedFoldObjectProperties(bpy.types.PropertyGroup):
         precision=1,
         subtype="ANGLE",
         unit="ROTATION",
+        update=_update_angle,
     )
 
     @property

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import bpy
 
-from ..scene import bake
+from ..scene import bake, source_state
 from . import _common
 from .job_modal import JobOperator
 
@@ -38,6 +38,13 @@ class CURVED_FOLD_OT_bake(JobOperator, bpy.types.Operator):
         return bake.bake_job(ob, list(range(scene.frame_start, scene.frame_end + 1)), scene=scene)
 
     def done(self, context, summary) -> None:
+        ob = bpy.data.objects.get(summary.ob_name)
+        if ob is not None and source_state.sources_changed(ob, context.scene):
+            self.report(
+                {"WARNING"},
+                f"'{ob.name}': its source curves changed since the fold; the bake folds the mesh as last folded "
+                "(Re-fold, then Bake again for the edited curves)",
+            )
         self.report({"INFO"}, f"'{summary.ob_name}': {summary.text()}")
 
 

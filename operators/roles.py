@@ -1,7 +1,7 @@
 """Give selected curve objects a crease role and fold angle, and select curves by role.
 
 Thin operators over :mod:`..scene.properties`: the role and angle are stored on the object
-(``Object.curved_fold``); the colours follow from the role's update callback.
+(``Object.curved_fold``); the colours follow from the role's update callback (:mod:`..scene.role_display`).
 """
 
 from __future__ import annotations
@@ -22,7 +22,8 @@ class CURVED_FOLD_OT_set_crease_role(bpy.types.Operator):
     bl_label = "Set Crease Role"
     bl_description = (
         "Give the selected curve objects a crease role (border, mountain, valley, facet, undriven, cut); each keeps "
-        "its own fold angle unless Set Fold Angle is on. The curves are colored as Origami Simulator draws them"
+        "its own fold angle unless Set Fold Angle is on. The curves are colored as Origami Simulator draws them, "
+        "through the object's material slots and color: their own materials stay, and None puts their look back"
     )
     bl_options = {"REGISTER", "UNDO"}
 

@@ -15,6 +15,14 @@ def _fold_props(context):
     return props if props is not None and props.is_fold_mesh else None
 
 
+def _sources_changed(context) -> bool:
+    """Whether the active fold object's source curves changed since its mesh was built (cached by the scene
+    module, so drawing stays cheap)."""
+    from ..scene.source_state import sources_changed
+
+    return sources_changed(context.active_object, context.scene)
+
+
 def _job_progress(layout, name: str) -> None:
     """Progress rows of the job running on the fold object ``name`` (iteration and residual, or frame k of n)."""
     from ..scene.jobs import running_job
@@ -79,6 +87,10 @@ class VIEW3D_PT_curved_fold_mesh(SidebarPanel, bpy.types.Panel):
         row.scale_y = 1.3
         row.operator("curved_fold.refold", icon="FILE_REFRESH")
         row.prop(props, "live", toggle=True, icon="REC" if props.live else "RADIOBUT_OFF")
+        if _sources_changed(context):
+            box = layout.box()
+            box.alert = True
+            box.label(text="Source curves changed since the fold: Re-fold", icon="ERROR")
         if props.last_message:
             box = layout.box()
             box.alert = True
@@ -140,6 +152,11 @@ class VIEW3D_PT_curved_fold_animation(SidebarPanel, bpy.types.Panel):
             box = layout.box()
             box.alert = True
             box.label(text="Bake out of date (live re-fold): Re-bake", icon="ERROR")
+        elif props.baked_frames and _sources_changed(context):  # a bake folds the stored mesh: Re-fold first
+            box = layout.box()
+            box.alert = True
+            box.label(text="Source curves changed since the bake:", icon="ERROR")
+            box.label(text="Re-fold, then Bake again", icon="BLANK1")
         row = layout.row(align=True)
         if stale:
             row.operator("curved_fold.bake", text="Re-bake", icon="RENDER_ANIMATION")

@@ -18,7 +18,7 @@ import numpy as np
 from ..core import as_units
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
-from . import bake, jobs, mesh_object, pins, self_intersection
+from . import bake, jobs, mesh_object, pins, self_intersection, source_state
 from .fold_settings import (
     engine_id,
     override_angle_degrees,
@@ -401,6 +401,7 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
     name = new_fold_name(sources, coll)
     source_names = [s.name for s in sources]
     coll_name = coll.name if coll is not None else None
+    sources_fingerprint = source_state.fingerprint(sources, scene)  # the curves as this job reads them
     preview = jobs.MeshPreview(
         name, collection=target, scene=scene, place=lambda tmp: mesh_object.place_beside(tmp, sources)
     )
@@ -414,10 +415,13 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
         preview.set_mesh(mesh)
         pct = options.fold_percent / 100.0
         out = yield from _solve_steps(mesh, solver_settings(None), pct, options.solver, warnings=warnings)
-        return lambda: (
-            create_fold(out, [bpy.data.objects[n] for n in source_names], coll_name, options, target, scene),
-            out,
-        )
+
+        def commit():
+            ob = create_fold(out, [bpy.data.objects[n] for n in source_names], coll_name, options, target, scene)
+            source_state.record(ob, sources_fingerprint)
+            return ob, out
+
+        return commit
 
     return jobs.Job(name, "folding", steps(), preview)
 
@@ -506,6 +510,7 @@ def refold_job(
     if rebuild and not sources:
         raise PatternError(f"'{ob.name}' has no source crease curves left to rebuild from")
     name = ob.name
+    sources_fingerprint = source_state.fingerprint(sources, scene) if rebuild else None  # as this job reads them
     stored = mesh_object.read_fold_mesh(ob)
     start = current_positions(ob, scene) if warm_start else None
     held = pins.constraints_from_object(ob, stored, scene)  # pins hold vertices where they are: start from the
@@ -532,7 +537,14 @@ def refold_job(
         x0 = start if not remesh else (transfer_positions(stored, start, mesh) if start is not None else None)
         constraints = None if remesh else held  # pins and glue name vertices of the stored mesh
         out = yield from _solve_steps(mesh, settings, pct, method, start=x0, warnings=warnings, constraints=constraints)
-        return lambda: write_refold(bpy.data.objects[name], out, remesh=remesh, keep_bake=live, scene=scene)
+        return lambda: write_refold(
+            bpy.data.objects[name],
+            out,
+            remesh=remesh,
+            keep_bake=live,
+            scene=scene,
+            sources_fingerprint=sources_fingerprint,
+        )
 
     return jobs.Job(name, "live re-fold" if live else "re-folding", steps(), previews, live=live)
 
@@ -583,9 +595,18 @@ def transfer_positions(old: FoldMesh, old_positions: np.ndarray, new: FoldMesh) 
     return out
 
 
-def write_refold(ob: bpy.types.Object, out: FoldOutcome, *, remesh: bool, keep_bake: bool, scene=None) -> FoldOutcome:
+def write_refold(
+    ob: bpy.types.Object,
+    out: FoldOutcome,
+    *,
+    remesh: bool,
+    keep_bake: bool,
+    scene=None,
+    sources_fingerprint: str | None = None,
+) -> FoldOutcome:
     """Write a re-fold's outcome onto ``ob`` (a new mesh when ``remesh``) and return it. A bake is kept and marked
-    out of date with ``keep_bake`` (live re-folds), else cleared."""
+    out of date with ``keep_bake`` (live re-folds), else cleared. ``sources_fingerprint`` (a rebuild from the
+    curves: :func:`source_state.fingerprint` of them when the job started) is stored as the curves the mesh matches."""
     results = {"fold_angles_sim": out.fold_angles, "strain_pct": out.strain_pct, "warp_deg": out.warp_deg}
     had_bake = bool(bake.baked_frames(ob))
     if had_bake and not keep_bake:
@@ -607,4 +628,5 @@ def write_refold(ob: bpy.types.Object, out: FoldOutcome, *, remesh: bool, keep_b
     if had_bake and keep_bake:
         bake.mark_stale(ob)
     store_figures(ob, out)
+    source_state.record(ob, sources_fingerprint)
     return out

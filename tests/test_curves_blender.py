@@ -455,19 +455,145 @@ def test_set_crease_role_operator_colours_and_selects(extension, clean_scene):
     for ob in (a, b):
         assert ob.curved_fold.role == "MOUNTAIN" and ob.curved_fold.fold_angle == pytest.approx(math.radians(75.0))
         assert tuple(ob.color) == pytest.approx(properties.ROLE_COLOURS["MOUNTAIN"])
-        assert ob.data.materials[0].name == "Curved Fold Mountain"
-        assert tuple(ob.data.materials[0].diffuse_color) == pytest.approx((1.0, 0.0, 0.0, 1.0))
+        slot = ob.material_slots[0]  # the role's material is the object's: the curve data keeps its own
+        assert slot.link == "OBJECT" and slot.material.name == "Curved Fold Mountain"
+        assert tuple(slot.material.diffuse_color) == pytest.approx((1.0, 0.0, 0.0, 1.0))
+        assert list(ob.data.materials) == [None]
         assert ob.data.bevel_depth > 0.0
     assert "curved_fold" not in mesh_ob.keys() or mesh_ob.curved_fold.role == "NONE"
     with bpy.context.temp_override(selected_objects=[mesh_ob]):
         assert not bpy.ops.curved_fold.set_crease_role.poll()
     b.curved_fold.role = "VALLEY"
-    assert b.data.materials[0].name == "Curved Fold Valley"
+    assert b.material_slots[0].material.name == "Curved Fold Valley"
     assert bpy.ops.curved_fold.select_by_role(role="VALLEY") == {"FINISHED"}
     assert [ob.name for ob in clean_scene.objects if ob.select_get()] == ["B"]
     # Clearing the role takes the role's colour, material and automatic bevel away again.
     b.curved_fold.role = "NONE"
-    assert len(b.data.materials) == 0 and b.data.bevel_depth == 0.0 and tuple(b.color) == (1.0, 1.0, 1.0, 1.0)
+    assert len(b.data.materials) == 0 and len(b.material_slots) == 0
+    assert b.data.bevel_depth == 0.0 and tuple(b.color) == (1.0, 1.0, 1.0, 1.0)
+    assert "cf_role_style" not in b and "cf_role_style" not in b.data
+
+
+def styled_curve(name: str, *, fill: str = "BOTH", colour=(1.0, 0.8, 0.0, 1.0)):
+    """A closed 2D Poly curve styled by its user: material "Gold" in the data's slot 0, an object colour, a fill."""
+    cu = bpy.data.curves.new(name, "CURVE")
+    cu.dimensions = "2D"
+    cu.fill_mode = fill
+    cu.bevel_resolution = 6
+    sp = cu.splines.new("POLY")
+    sp.points.add(2)
+    for q, p in zip(sp.points, [(0.0, 0.0), (0.05, 0.08), (0.1, 0.0)], strict=True):
+        q.co = (*p, 0.0, 1.0)
+    sp.use_cyclic_u = True
+    gold = bpy.data.materials.get("Gold") or bpy.data.materials.new("Gold")
+    cu.materials.append(gold)
+    ob = bpy.data.objects.new(name, cu)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.color = colour
+    return ob
+
+
+def styling(ob) -> dict:
+    """What the user sees of a curve's own styling (data materials, object slots, colour, fill, bevel)."""
+    cu = ob.data
+    return {
+        "data_materials": [m.name if m else None for m in cu.materials],
+        "slots": [(s.link, s.material.name if s.material else None) for s in ob.material_slots],
+        "colour": tuple(round(c, 4) for c in ob.color),
+        "fill": cu.fill_mode,
+        "bevel": (round(cu.bevel_depth, 7), cu.bevel_resolution),
+    }
+
+
+def test_a_role_keeps_the_users_styling_and_none_puts_it_back(extension, clean_scene):
+    """Tester's repro: Set Crease Role replaced the curve's "Gold" material (slot 0), its object colour and 2D fill
+    BOTH, and setting the role back to None left no material, a white colour and fill NONE; a linked duplicate's
+    material changed too. Now the role shows through the object's own slots and colour, and None restores all."""
+    ob = styled_curve("Logo")
+    dup = bpy.data.objects.new("Logo copy", ob.data)  # a linked duplicate: same curve data
+    clean_scene.collection.objects.link(dup)
+    own, dup_own = styling(ob), styling(dup)
+    with bpy.context.temp_override(selected_objects=[ob], active_object=ob):
+        assert bpy.ops.curved_fold.set_crease_role(role="VALLEY") == {"FINISHED"}
+    shown = styling(ob)
+    assert shown["data_materials"] == ["Gold"] and shown["slots"] == [("OBJECT", "Curved Fold Valley")]
+    assert shown["colour"] == (0.0, 0.0, 1.0, 1.0) and shown["fill"] == "NONE" and shown["bevel"][0] > 0.0
+    assert styling(dup)["slots"] == [("DATA", "Gold")] and styling(dup)["colour"] == dup_own["colour"]
+    ob.curved_fold.role = "MOUNTAIN"  # role to role: still the user's styling underneath
+    assert styling(ob)["slots"] == [("OBJECT", "Curved Fold Mountain")]
+    with bpy.context.temp_override(selected_objects=[ob], active_object=ob):
+        assert bpy.ops.curved_fold.set_crease_role(role="NONE") == {"FINISHED"}
+    assert styling(ob) == own and styling(dup) == dup_own
+    assert "cf_role_style" not in ob and "cf_role_style" not in ob.data
+
+
+def test_role_display_with_object_materials_duplicates_and_user_changes(extension, clean_scene):
+    """An object-linked material of the user's comes back; the shared curve's fill and bevel come back only when
+    no linked duplicate shows a role any more; a colour or fill the user changes while the role is set stays."""
+    ob = styled_curve("Logo")
+    silver = bpy.data.materials.new("Silver")
+    ob.material_slots[0].link = "OBJECT"
+    ob.material_slots[0].material = silver
+    dup = bpy.data.objects.new("Logo copy", ob.data)
+    clean_scene.collection.objects.link(dup)
+    own, dup_own = styling(ob), styling(dup)
+    ob.curved_fold.role = "BORDER"
+    dup.curved_fold.role = "CUT"
+    assert styling(ob)["slots"] == [("OBJECT", "Curved Fold Border")]
+    assert styling(dup)["slots"] == [("OBJECT", "Curved Fold Cut")]
+    ob.curved_fold.role = "NONE"
+    assert styling(ob)["slots"] == own["slots"] and styling(ob)["colour"] == own["colour"]
+    assert styling(ob)["fill"] == "NONE" and styling(ob)["bevel"][0] > 0.0  # the duplicate still shows its role
+    dup.color = (0.2, 0.3, 0.4, 1.0)  # the user's own change while the role is set: kept
+    dup.curved_fold.role = "NONE"
+    assert styling(dup) == dict(dup_own, colour=(0.2, 0.3, 0.4, 1.0))
+    assert styling(ob) == own
+    ob.curved_fold.role = "FACET"
+    ob.data.fill_mode = "FRONT"
+    ob.curved_fold.role = "NONE"
+    assert styling(ob)["fill"] == "FRONT"
+
+
+def test_role_display_follows_undo_and_reload(extension, clean_scene, tmp_path):
+    """What a role replaced is kept in ID properties: undo takes the role display back, and a file saved with a
+    role set restores the user's styling when the role is cleared after reopening."""
+    ob = styled_curve("Logo")
+    own = styling(ob)
+    ob.select_set(True)
+    bpy.context.view_layer.objects.active = ob
+    bpy.ops.ed.undo_push(message="styled")
+    assert bpy.ops.curved_fold.set_crease_role("EXEC_DEFAULT", True, role="VALLEY") == {"FINISHED"}
+    assert styling(bpy.data.objects["Logo"]) != own
+    assert bpy.ops.ed.undo() == {"FINISHED"}
+    ob = bpy.data.objects["Logo"]
+    assert styling(ob) == own and ob.curved_fold.role == "NONE"
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    assert bpy.data.objects["Logo"].curved_fold.role == "VALLEY"
+    path = tmp_path / "styled.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    ob = bpy.data.objects["Logo"]
+    ob.curved_fold.role = "NONE"
+    assert styling(ob) == own
+
+
+def test_a_curve_styled_by_an_older_version_is_cleared_as_before(extension, clean_scene):
+    """Files from before: the role material sits in the data's slot 0 and nothing was remembered. Clearing the
+    role removes it, the role colour and the automatic bevel (what that version did); a new role then starts from
+    there. A curve that never had a role is left alone when set to None."""
+    ob = styled_curve("Old", colour=(0.0, 0.0, 1.0, 1.0))
+    ob.data.materials[0] = bpy.data.materials.new("Curved Fold Valley")
+    ob.data.bevel_depth = 0.0004
+    ob.data["cf_auto_bevel"] = True
+    plain = styled_curve("Plain", colour=(1.0, 0.0, 0.0, 1.0))  # pure red, as a mountain, but never a role
+    before = styling(plain)
+    plain.curved_fold.role = "NONE"
+    assert styling(plain) == before
+    ob.curved_fold.role = "MOUNTAIN"
+    assert styling(ob)["data_materials"] == [None] and styling(ob)["slots"] == [("OBJECT", "Curved Fold Mountain")]
+    ob.curved_fold.role = "NONE"
+    assert styling(ob)["data_materials"] == [] and styling(ob)["colour"] == (1.0, 1.0, 1.0, 1.0)
+    assert styling(ob)["bevel"][0] == 0.0
 
 
 def test_command_line_reads_a_blend_file(mod, clean_scene, tmp_path):

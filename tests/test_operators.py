@@ -522,3 +522,130 @@ def test_pattern_that_cannot_fold_is_reported(extension, clean_scene):
     assert bpy.ops.curved_fold.fold() == {"FINISHED"}
     props = bpy.context.active_object.curved_fold_mesh
     assert "does not fold as assigned" in props.last_message and props.last_fold_error > 10.0
+
+
+class _Layout:
+    """A stand-in for ``UILayout`` that records the texts a panel draws (labels and operator buttons)."""
+
+    def __init__(self, texts=None):
+        self.texts = [] if texts is None else texts
+
+    def label(self, text="", **_):
+        self.texts.append(text)
+
+    def operator(self, idname, text=None, **_):
+        self.texts.append(text if text is not None else idname)
+        return type("OperatorProperties", (), {})()
+
+    def prop(self, *_, **__):
+        pass
+
+    def progress(self, text="", **_):
+        self.texts.append(text)
+
+    def row(self, **_):
+        return _Layout(self.texts)
+
+    column = box = split = row
+
+
+def panel_texts(panel_name):
+    """The texts the sidebar panel ``panel_name`` draws for the active object."""
+    layout = _Layout()
+    getattr(bpy.types, panel_name).draw(type("Panel", (), {"layout": layout})(), bpy.context)
+    return layout.texts
+
+
+def test_non_live_curve_edits_show_the_fold_and_bake_out_of_date(folded, extension):
+    """With Live off, editing a source curve after Fold and Bake (a point, the fold angle, the role, the transform)
+    makes the panels say the fold and the bake no longer match the curves (tester's repro: after moving a point
+    20 mm and changing the angle 90° → 150°, the panel still showed "baked: 40" with nothing out of date); putting
+    the curve back, or Re-fold, clears it. Nothing is re-folded or re-baked by the check."""
+    ob, border, crease = folded
+    state = mod(extension, "scene.source_state")
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 3
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    assert not state.sources_changed(ob)
+    mesh_notice = "Source curves changed since the fold: Re-fold"
+    bake_notice = "Source curves changed since the bake:"
+    assert mesh_notice not in panel_texts("VIEW3D_PT_curved_fold_mesh")
+    assert bake_notice not in panel_texts("VIEW3D_PT_curved_fold_animation")
+    flat = np.empty(2 * len(ob.data.vertices), np.float32)
+    ob.data.attributes["cf_flat"].data.foreach_get("vector", flat)
+    point = crease.data.splines[0].bezier_points[1]
+    x0 = point.co.x
+    point.co.x = x0 - 0.02  # 20 mm
+    crease.data.update_tag()
+    bpy.context.view_layer.update()
+    assert state.sources_changed(ob)
+    assert mesh_notice in panel_texts("VIEW3D_PT_curved_fold_mesh")
+    texts = panel_texts("VIEW3D_PT_curved_fold_animation")
+    assert bake_notice in texts and "Re-fold, then Bake again" in texts
+    after = np.empty_like(flat)
+    ob.data.attributes["cf_flat"].data.foreach_get("vector", after)
+    assert np.array_equal(after, flat) and ob.curved_fold_mesh.baked_frames == 3  # nothing re-folded
+    point.co.x = x0  # back as it was: the fold matches its curves again
+    crease.data.update_tag()
+    bpy.context.view_layer.update()
+    assert not state.sources_changed(ob)
+    # The fold angle alone (a Python property: its update tags the object, so the cached answer is dropped).
+    crease.curved_fold.fold_angle = math.radians(150.0)
+    bpy.context.view_layer.update()
+    assert state.sources_changed(ob)
+    crease.curved_fold.fold_angle = math.radians(90.0)
+    bpy.context.view_layer.update()
+    assert not state.sources_changed(ob)
+    for owner, attr, value in ((crease.curved_fold, "role", "MOUNTAIN"), (border, "location", (0.01, 0.0, 0.0))):
+        before = tuple(getattr(owner, attr)) if attr == "location" else getattr(owner, attr)
+        setattr(owner, attr, value)
+        bpy.context.view_layer.update()
+        assert state.sources_changed(ob), attr
+        setattr(owner, attr, before)
+        bpy.context.view_layer.update()
+        assert not state.sources_changed(ob), attr
+    # Re-fold rebuilds from the edited curves: it matches them again (and clears the bake, which would be stale).
+    crease.curved_fold.fold_angle = math.radians(150.0)
+    bpy.context.view_layer.update()
+    assert state.sources_changed(ob)
+    assert bpy.ops.curved_fold.refold(rebuild="RESOLVE") == {"FINISHED"}  # the stored mesh: still the old curves
+    assert state.sources_changed(ob)
+    assert bpy.ops.curved_fold.refold() == {"FINISHED"}
+    assert not state.sources_changed(ob) and ob.curved_fold_mesh.baked_frames == 0
+    assert mesh_notice not in panel_texts("VIEW3D_PT_curved_fold_mesh")
+
+
+def test_out_of_date_sources_survive_reload_and_follow_undo(folded, extension, tmp_path):
+    """The fingerprint is an ID property of the fold object: saved with the file and restored by undo."""
+    ob, _, crease = folded
+    state = mod(extension, "scene.source_state")
+    name = ob.name
+    path = tmp_path / "folded.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    ob, crease = bpy.data.objects[name], bpy.data.objects["Valley"]
+    assert state.FINGERPRINT_KEY in ob and not state.sources_changed(ob)
+    bpy.ops.ed.undo_push(message="loaded")
+    crease.data.splines[0].bezier_points[1].co.y += 0.005
+    crease.data.update_tag()
+    bpy.context.view_layer.update()
+    bpy.ops.ed.undo_push(message="moved a point")
+    assert state.sources_changed(bpy.data.objects[name])
+    assert bpy.ops.ed.undo() == {"FINISHED"}
+    assert not state.sources_changed(bpy.data.objects[name])
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    assert state.sources_changed(bpy.data.objects[name])
+
+
+def test_live_refolds_when_a_source_curve_fold_angle_changes(folded, extension):
+    """A curve's Fold Angle is a Python property: its update tags the object, so the depsgraph handler of Live sees
+    the change (before, only point and transform edits reached it)."""
+    ob, _, crease = folded
+    live = mod(extension, "scene.live")
+    ob.curved_fold_mesh.live = True
+    live._pending.clear()
+    crease.curved_fold.fold_angle = math.radians(120.0)
+    bpy.context.view_layer.update()
+    assert list(live._pending) == [ob.name]
+    live._pending.clear()
+    ob.curved_fold_mesh.live = False

@@ -12,7 +12,7 @@ import numpy as np
 from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from ..scene import bake, export, folding, mesh_object
+from ..scene import bake, export, folding, mesh_object, source_state
 from . import _common
 
 FORMATS = (
@@ -136,6 +136,12 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
                 {"WARNING"},
                 f"Exported '{ob.name}' ({len(positions)} baked frame(s)) to {path}, but the bake is out of date: "
                 "the fold changed since it was baked; bake again to export what the viewport shows",
+            )
+        elif source_state.sources_changed(ob, context.scene):  # curves edited with Live off since the fold
+            self.report(
+                {"WARNING"},
+                f"Exported '{ob.name}' ({len(positions)} frame(s)) to {path}, but its source curves changed since "
+                "the fold: Re-fold (and Bake again) to export them",
             )
         else:
             self.report({"INFO"}, f"Exported '{ob.name}' ({len(positions)} frame(s)) to {path}")

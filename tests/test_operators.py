@@ -367,6 +367,12 @@ def test_export_of_an_out_of_date_bake_says_so(folded, extension, tmp_path, capf
     bake.mark_stale(ob)
     assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "b.fold"), file_format="FOLD") == {"FINISHED"}
     assert "the bake is out of date: the fold changed since it was baked" in capfd.readouterr().out
+    bake.forget_stale(ob)
+    _, crease = folded[1], folded[2]
+    crease.location.x += 5.0  # a curve moved with Live off: the fold (and its bake) no longer match it
+    bpy.context.view_layer.update()
+    assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "c.fold"), file_format="FOLD") == {"FINISHED"}
+    assert "its source curves changed since the fold" in capfd.readouterr().out
 
 
 def test_export_mesh_applies_solidify_in_millimetres(folded, tmp_path):

@@ -162,6 +162,18 @@ def test_self_crossing_border_is_an_error() -> None:
     assert "SVG <path id='border'> (line 3)" in str(exc.value)
 
 
+def test_a_circle_drawn_over_the_edge_is_two_crossing_outlines_not_a_line_inside() -> None:
+    """A notch drawn as a black circle over the sheet's edge: two outlines cross, and which side is paper is the
+    designer's to say. Merging the reading of black lines inside the sheet as cuts made it fold, silently, into
+    three pieces (the rect's edge inside the circle and the circle's inner arc taken for cuts); it is refused, as
+    before, naming both strokes."""
+    with pytest.raises(PatternError, match=r"border crosses or touches itself at .*SVG <rect> \(line 3\), SVG "):
+        pattern_of(
+            '<rect x="0" y="0" width="150" height="150" fill="none" stroke="#000000"/>'
+            '\n<circle id="notch" cx="75" cy="0" r="20" fill="none" stroke="#000000"/>'
+        )
+
+
 def test_crease_outside_the_border_is_removed_with_a_warning() -> None:
     p = pattern_of(BORDER + '\n<path id="outside" d="M150 0 L150 100" stroke="#f00"/>')
     assert any(

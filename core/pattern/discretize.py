@@ -934,6 +934,11 @@ def _stray_border_as_cuts(
     stray = ~outline & (looped | inside)
     if not stray.any():
         return attrs
+    if np.isin(pieces.polyline[attrs[bi[stray]]], pieces.polyline[attrs[bi[outline]]]).any():
+        # a stroke partly on the outline and partly inside it: two outlines cross (a notch drawn as a circle over
+        # the edge), not a line inside the sheet; which side is paper is the designer's to say (_clip_to_border
+        # refuses a border that crosses itself)
+        return attrs
     named = bi[stray & inside]
     if len(named):
         warnings.append(

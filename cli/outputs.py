@@ -11,6 +11,8 @@
 from __future__ import annotations
 
 import math
+import os
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -31,9 +33,22 @@ def check_outputs(input_path: str | Path, outputs: dict[str, str | Path | None])
                 raise PatternError(f"{opt_a} {a} and {opt_b} {b} name the same file; give each its own file")
     for option, path in given:
         try:
-            output_target(path)
+            target = output_target(path)
         except OSError as exc:
             raise PatternError(f"{option} {exc}") from None
+        _probe_folder(option, path, target.parent)
+
+
+def _probe_folder(option: str, path: Path, folder: Path) -> None:
+    """Raise :class:`PatternError` unless a file can be made in ``folder`` (a temporary one, removed at once): a
+    read-only file system or folder was found only when the result was written, after the whole fold (seconds on
+    a big pattern), and the message did not name the option."""
+    try:
+        fd, name = tempfile.mkstemp(prefix=".curved_fold-probe.", dir=folder)
+    except OSError as exc:
+        raise PatternError(f"{option} {path}: cannot write in {folder}: {exc.strerror or exc}") from None
+    os.close(fd)
+    os.unlink(name)
 
 
 def finite_json(value: Any) -> Any:

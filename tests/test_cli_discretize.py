@@ -73,6 +73,8 @@ def test_given_parameters_and_warnings_are_printed(tmp_path: Path) -> None:
             [str(EXAMPLES / "single_curve.svg"), "--out", "x.fold", "--collection", "A"],
             "single_curve.svg: only a .blend file has collections to choose from ('A')",
         ),
+        # a folder no one may write in (sysfs, even for root) is found before the work, naming the option
+        ([str(EXAMPLES / "single_curve.svg"), "--out", "/sys/x.fold"], "--out /sys/x.fold: cannot write in /sys"),
     ],
 )
 def test_bad_input_exits_2_with_one_line(args: list[str], message: str, tmp_path: Path) -> None:

@@ -150,6 +150,20 @@ def test_cli_output_to_a_closed_pipe_still_writes_and_succeeds(tmp_path):
     assert out.stat().st_size > 0 and json.loads(rep.read_text())["converged"]
 
 
+def test_cli_finds_an_unwritable_output_folder_before_folding(capsys, monkeypatch):
+    """A read-only output folder was found only when the result was written, after the whole fold (seconds on a big
+    pattern), in a message without the option's name. sysfs refuses new files even to root."""
+    import curved_fold.core.pipeline as pipeline
+    from curved_fold.cli import main
+
+    def no_fold(*_args, **_kwargs):
+        raise AssertionError("folded before the output folder was checked")
+
+    monkeypatch.setattr(pipeline, "fold_pattern", no_fold)
+    assert main(["fold", str(FIXTURES / "CircularPleat-antiFacet.svg"), "--out", "/sys/cp.glb"]) == 2
+    assert "curved_fold: error: --out /sys/cp.glb: cannot write in /sys" in capsys.readouterr().err
+
+
 def test_cli_rejects_unknown_output_suffix(tmp_path, capsys):
     from curved_fold.cli import main
 

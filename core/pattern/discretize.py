@@ -1047,7 +1047,7 @@ def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnin
     if len(ends) < 2:
         return curves
     pts = np.array([p for _, _, p in ends], dtype=np.float64)
-    loose = [i for i, met in enumerate(_ends_met(pts, merge_tolerance)) if met % 2 == 0]  # odd: joined
+    loose = np.flatnonzero(_ends_met(pts, merge_tolerance) % 2 == 0)  # an end met an odd number of times is joined
     if len(loose) != 2 or _on_or_inside_closed_border(pts[loose], curves, SNAP_FACTOR * merge_tolerance).any():
         return curves
     a, b = pts[loose[0]], pts[loose[1]]
@@ -1079,19 +1079,13 @@ def _on_or_inside_closed_border(points: np.ndarray, curves: list[CreaseCurve], t
     return out
 
 
-def _ends_met(pts: np.ndarray, tol: float) -> list[int]:
-    """For each point, how many others lie within ``tol`` (a grid of ``tol`` cells: linear in the number of
-    points, where all pairs would take quadratic memory on a border drawn as thousands of strokes)."""
-    cell = max(float(tol), 1e-300)
-    keys = np.floor(pts / cell).astype(np.int64)
-    grid: dict[tuple[int, int], list[int]] = {}
-    for i, (kx, ky) in enumerate(keys.tolist()):
-        grid.setdefault((kx, ky), []).append(i)
-    met = []
-    for i, (kx, ky) in enumerate(keys.tolist()):
-        near = [j for dx in (-1, 0, 1) for dy in (-1, 0, 1) for j in grid.get((kx + dx, ky + dy), ()) if j != i]
-        met.append(int(np.count_nonzero(np.hypot(*(pts[near] - pts[i]).T) <= tol)) if near else 0)
-    return met
+def _ends_met(pts: np.ndarray, tol: float) -> np.ndarray:
+    """For each point, how many others lie within ``tol`` (near pairs from :func:`_candidate_pairs`' grid, the
+    points taken as segments of no length: linear in the number of points, where all pairs would take quadratic
+    memory on a border drawn as thousands of strokes)."""
+    i, j = _candidate_pairs(pts, pts, tol)
+    near = np.hypot(*(pts[i] - pts[j]).T) <= tol
+    return np.bincount(np.concatenate([i[near], j[near]]), minlength=len(pts))
 
 
 def _clip_to_border(

@@ -60,6 +60,19 @@ def default_unit_scale(scene: bpy.types.Scene | None = None) -> float:
     return 1.0 / (1000.0 * (scale if scale > 0.0 else 1.0))
 
 
+def curve_objects(objects) -> list[bpy.types.Object]:
+    """The curve objects among ``objects`` that carry a crease role (others, e.g. crease-display curves, are not)."""
+    out = []
+    for ob in objects:
+        if ob is None or ob.type != "CURVE" or "cf_crease_role" in ob:
+            continue
+        props = getattr(ob, "curved_fold", None)
+        if props is not None and getattr(props, "role", "NONE") == "NONE":
+            continue
+        out.append(ob)
+    return out
+
+
 def _role_and_angle(ob: bpy.types.Object) -> tuple[str, float]:
     props = getattr(ob, "curved_fold", None)
     if props is None:
@@ -389,7 +402,7 @@ def _blend_objects(path: Path, data, scene, collection: str | None, warnings: li
     those of ``collection``, or of ``scene`` less the view layer's excluded collections; warnings name what is
     left out, objects whose placement the file does not hold (constraints, non-object parents), and a file whose
     borders lie in several collections (several patterns folded as one sheet)."""
-    curves = [ob for ob in data.objects if ob is not None and ob.type == "CURVE" and _role_and_angle(ob)[0] != "NONE"]
+    curves = curve_objects(data.objects)
     if collection is not None:
         chosen = next((c for c in data.collections if c is not None and c.name == collection), None)
         if chosen is None:
@@ -399,9 +412,7 @@ def _blend_objects(path: Path, data, scene, collection: str | None, warnings: li
         members = {ob.name for ob in chosen.all_objects}
         kept = [ob for ob in curves if ob.name in members]
     elif scene is not None:
-        excluded = _excluded_collections(scene)
-        visible = {ob.name for c in _visible_collections(scene, excluded) for ob in c.objects}
-        visible |= {ob.name for ob in scene.collection.objects}
+        visible, excluded = _shown_in(scene)
         kept = [ob for ob in curves if ob.name in visible]
         left = [ob.name for ob in curves if ob.name not in visible]
         if left:
@@ -429,33 +440,22 @@ def _blend_objects(path: Path, data, scene, collection: str | None, warnings: li
     return kept
 
 
-def _excluded_collections(scene) -> list[bpy.types.Collection]:
-    """Collections excluded (the checkbox) from ``scene``'s first view layer."""
-    out: list[bpy.types.Collection] = []
+def _shown_in(scene) -> tuple[set[str], list[bpy.types.Collection]]:
+    """The names of the objects ``scene`` shows — in its collection or in one not excluded (the checkbox) from its
+    first view layer, nor inside an excluded one — and the excluded collections (one walk of the layer tree)."""
     if not scene.view_layers:
-        return out
-    stack = list(scene.view_layers[0].layer_collection.children)
+        return {ob.name for ob in scene.collection.all_objects}, []
+    shown: set[str] = set()
+    excluded: list[bpy.types.Collection] = []
+    stack = [scene.view_layers[0].layer_collection]  # its collection is the scene's own
     while stack:
         lc = stack.pop()
         if lc.exclude:
-            out.append(lc.collection)
-        else:
-            stack.extend(lc.children)
-    return out
-
-
-def _visible_collections(scene, excluded: list[bpy.types.Collection]) -> list[bpy.types.Collection]:
-    """The collections of ``scene`` not excluded from its first view layer (nor inside an excluded one)."""
-    skip = {c.name for c in excluded}
-    out: list[bpy.types.Collection] = []
-    stack = list(scene.collection.children)
-    while stack:
-        c = stack.pop()
-        if c.name in skip:
+            excluded.append(lc.collection)
             continue
-        out.append(c)
-        stack.extend(c.children)
-    return out
+        shown.update(ob.name for ob in lc.collection.objects)
+        stack.extend(lc.children)
+    return shown, excluded
 
 
 def _warn_placement(ob: bpy.types.Object, warnings: list[str]) -> None:

@@ -19,6 +19,7 @@ from ..core import as_units
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import PatternError
 from . import bake, jobs, mesh_object, pins, self_intersection, source_state
+from .curves import curve_objects
 from .fold_settings import (
     engine_id,
     override_angle_degrees,
@@ -63,19 +64,6 @@ def engine_errors() -> tuple[type[BaseException], ...]:
     except ImportError:  # pragma: no cover
         pass
     return tuple(errors)
-
-
-def curve_objects(objects) -> list[bpy.types.Object]:
-    """The curve objects among ``objects`` that carry a crease role (others, e.g. crease-display curves, are not)."""
-    out = []
-    for ob in objects:
-        if ob is None or ob.type != "CURVE" or "cf_crease_role" in ob:
-            continue
-        props = getattr(ob, "curved_fold", None)
-        if props is not None and getattr(props, "role", "NONE") == "NONE":
-            continue
-        out.append(ob)
-    return out
 
 
 def solver_settings(props, *, max_iterations: int | None = None):

@@ -1112,8 +1112,7 @@ def _self_and_ancestors(elem: _Element, parents: dict[int, _Element]) -> list[_E
 def _lines(lines: list[int]) -> str:
     """``line 7`` or ``lines 7, 8, … and 2 more`` (each line once, at most eight listed)."""
     lines = list(dict.fromkeys(lines))
-    shown = ", ".join(map(str, lines[:8])) + (f" and {len(lines) - 8} more" if len(lines) > 8 else "")
-    return f"line {shown}" if len(lines) == 1 else f"lines {shown}"
+    return ("line " if len(lines) == 1 else "lines ") + _names([str(x) for x in lines], limit=8)
 
 
 def _no_stroke(stroke: str | None) -> bool:

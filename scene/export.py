@@ -350,9 +350,7 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
     else:  # .blend
         # with its scene, so the file opens showing the object and the baked frame range (an object alone opened
         # to an empty scene, "Library file, loading empty scene", reachable only through Append)
-        scene = ob.users_scene[0]
-        scene.camera = None
-        bpy.data.libraries.write(str(path), {scene, ob}, fake_user=True)
+        bpy.data.libraries.write(str(path), {ob.users_scene[0], ob}, fake_user=True)
         result = {"FINISHED"}
     if "FINISHED" not in result or not path.exists():
         raise OSError(f"{path}: Blender's {suffix} exporter did not write the file ({result})")

@@ -8,7 +8,7 @@ and fold angle, and of the scene's unit scale. :func:`sources_changed` compares 
 
 It runs lazily, when the panel is drawn, and only after something that can change the answer: the result is cached
 per fold object until a depsgraph update touches a curve object or a collection (:func:`on_depsgraph_update` only
-bumps a counter), an undo, redo or file load, or the object's stored fingerprint or sources change. Playback and
+clears the cache), an undo, redo or file load, or the object's stored fingerprint or sources change. Playback and
 edits of meshes do not invalidate it. A fold object made before fingerprints existed has none and shows no notice.
 """
 
@@ -25,7 +25,6 @@ from . import app_handlers
 FINGERPRINT_KEY = "cf_sources_fingerprint"
 """Object ID property of a fold object: fingerprint (hex) of the source curves its mesh was last built from."""
 
-_state = {"generation": 0}
 _cache: dict[str, tuple[tuple, bool]] = {}
 """Fold object name → (what the answer depends on, whether its sources changed)."""
 
@@ -77,7 +76,6 @@ def sources_changed(ob: bpy.types.Object, scene: bpy.types.Scene | None = None) 
     props = ob.curved_fold_mesh
     coll = props.source_collection
     key = (
-        _state["generation"],
         str(stored),
         float(scene.unit_settings.scale_length) if scene is not None else 1.0,
         coll.name if coll is not None else None,
@@ -94,7 +92,6 @@ def sources_changed(ob: bpy.types.Object, scene: bpy.types.Scene | None = None) 
 
 def invalidate() -> None:
     """Forget every cached answer (a curve or collection changed, or undo, redo, file load)."""
-    _state["generation"] += 1
     _cache.clear()
 
 

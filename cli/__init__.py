@@ -8,7 +8,6 @@ The same core pipeline runs here and behind the operators.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 from ..core.pattern.model import PatternError
@@ -61,9 +60,10 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except BrokenPipeError:
         # the reader of the summary went away (`| head -1`); only the summary, printed after every file is written
-        # (the exporters' own lines are guarded where they are passed on), can raise it, so the run succeeded;
-        # stdout is pointed at /dev/null so that its flush at exit does not fail again
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        # (the exporters' own lines are guarded where they are passed on), can raise it, so the run succeeded
+        from .outputs import stdout_to_devnull
+
+        stdout_to_devnull()
         return 0
     except OSError as exc:
         print(f"curved_fold: error: {exc}", file=sys.stderr)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from ..core.io.atomic import OutputError, atomic_output
 from ..core.pattern.model import PatternError
-from .outputs import check_outputs, finite_json
+from .outputs import check_outputs, finite_json, stdout_to_devnull
 from .progress import Progress
 
 OUTPUT_SUFFIXES = (".fold", ".obj", ".stl", ".glb", ".blend")
@@ -100,7 +100,7 @@ def _exporter_output(tmp: Path, out: Path, quiet: bool) -> Iterator[_Captured]:
                     sys.stdout.write(_user_paths(sink.read().decode("utf-8", "replace"), tmp, out))
                     sys.stdout.flush()
                 except BrokenPipeError:  # no one reads the output any more (`| head -1`): the write goes on
-                    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+                    stdout_to_devnull()
 
 
 def _user_paths(text: str, tmp: Path, out: Path) -> str:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -49,6 +50,14 @@ def _probe_folder(option: str, path: Path, folder: Path) -> None:
         raise PatternError(f"{option} {path}: cannot write in {folder}: {exc.strerror or exc}") from None
     os.close(fd)
     os.unlink(name)
+
+
+def stdout_to_devnull() -> None:
+    """Point standard output at /dev/null: its reader went away (`| head -1`), and the flush at exit (or a later
+    print) would raise BrokenPipeError again."""
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, sys.stdout.fileno())
+    os.close(null)
 
 
 def finite_json(value: Any) -> Any:

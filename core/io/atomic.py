@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import signal
 import stat
 import tempfile
@@ -184,8 +185,6 @@ def sweep_orphans(dest: Path) -> list[str]:
     running; a write still in progress in another process is left alone."""
     if os.name != "posix":  # os.kill(pid, 0) is a liveness test only on POSIX
         return []
-    import re
-
     pattern = re.compile(r"^\.{1,2}" + re.escape(dest.stem) + r"\.cf\d+-.*\.tmp" + re.escape(dest.suffix) + "$")
     removed = []
     try:

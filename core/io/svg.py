@@ -479,6 +479,11 @@ def _parse_opacity(value: str | None, what: str, where: str) -> float:
 _TRANSFORM = re.compile(r"\s*(matrix|translate|scale|rotate|skewX|skewY)\s*\(([^)]*)\)\s*,?", re.I)
 
 
+def _translation(x: float, y: float) -> np.ndarray:
+    """The 3×3 matrix that moves by (x, y)."""
+    return np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
+
+
 def parse_transform(value: str, where: str = "transform") -> np.ndarray:
     """3×3 affine matrix of an SVG ``transform`` list (the leftmost transform is applied last)."""
     m = np.eye(3)
@@ -509,9 +514,7 @@ def parse_transform(value: str, where: str = "transform") -> np.ndarray:
             r = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
             if n == 3:
                 cx, cy = args[1], args[2]
-                tr = np.array([[1, 0, cx], [0, 1, cy], [0, 0, 1.0]])
-                back = np.array([[1, 0, -cx], [0, 1, -cy], [0, 0, 1.0]])
-                r = tr @ r @ back
+                r = _translation(cx, cy) @ r @ _translation(-cx, -cy)
             t = r
         elif name == "skewx" and n == 1:
             t[0, 1] = math.tan(math.radians(args[0]))
@@ -1052,7 +1055,7 @@ def _nested_viewport(
     if (width is not None and width <= 0) or (height is not None and height <= 0):
         return None
     x, y = _attr_float(elem, "x", where, box=box), _attr_float(elem, "y", where, box=box)
-    shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
+    shift = _translation(x, y)
     vbox = _viewbox(elem, where)
     if vbox is None:
         return shift, (width, height) if width is not None and height is not None else None
@@ -1264,8 +1267,7 @@ class _Reader:
             self.cycles.append(elem.line)
         else:
             x, y = _attr_float(elem, "x", where, box=place.box), _attr_float(elem, "y", where, box=place.box)
-            shift = np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
-            matrix = compose(place.matrix, shift, where, f"x={x:g} y={y:g}")
+            matrix = compose(place.matrix, _translation(x, y), where, f"x={x:g} y={y:g}")
             self.todo.append((target, _Place(matrix, place.style, (*place.via, elem), place.faded, place.box)))
 
     def _shape(self, elem: _Element, place: _Place, own: dict[str, str], where: str) -> None:

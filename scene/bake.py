@@ -22,7 +22,7 @@ from dataclasses import field as dc_field
 import bpy
 import numpy as np
 
-from .mesh_object import _crease_curve_objects, crease_point_indices, mm_per_unit
+from .mesh_object import _crease_curve_objects, crease_point_indices, flat_rescale, mm_per_unit
 
 KEY_PREFIX = "cf_frame_"
 
@@ -165,7 +165,7 @@ def bake_shape_keys(
         if flat is not None:
             xy = np.empty(2 * n, dtype=np.float32)
             flat.data.foreach_get("vector", xy)
-            base[:, :2] = xy.reshape(-1, 2) * scale
+            base[:, :2] = xy.reshape(-1, 2) * (scale * flat_rescale(me, scene))
         else:
             me.attributes["position"].data.foreach_get("vector", base.ravel())
     else:

@@ -49,6 +49,21 @@ def mm_per_unit(scene: bpy.types.Scene | None = None) -> float:
     return 1000.0 * (scale if scale > 0 else 1.0)
 
 
+FLAT_UNIT_KEY = "cf_mm_per_unit"
+"""ID property of a fold mesh: :func:`mm_per_unit` of the scene when its flat pattern (``cf_flat``, mm) was written."""
+
+
+def flat_rescale(me: bpy.types.Mesh, scene: bpy.types.Scene | None = None) -> float:
+    """Factor that turns the stored flat pattern's millimetres into the scene's millimetres now.
+
+    Changing the scene's Unit Scale changes what a Blender unit means, not the geometry: the curves and the folded
+    mesh keep their size in Blender units. The flat pattern was stored in the millimetres of the fold's unit scale,
+    so it is read back × (mm per unit now / then); without this, a re-solve or bake after switching Unit Scale from
+    1 to 0.001 wrote the sheet 1000× larger than its curves. Meshes stored before the key existed: 1."""
+    then = me.get(FLAT_UNIT_KEY)
+    return 1.0 if not then else mm_per_unit(scene) / float(then)
+
+
 def _edge_keys(edges: np.ndarray, n: int) -> np.ndarray:
     e = np.sort(np.asarray(edges, dtype=np.int64).reshape(-1, 2), axis=1)
     return e[:, 0] * n + e[:, 1]
@@ -241,7 +256,7 @@ def create_fold_object(
     try:
         ob = bpy.data.objects.new(name, me)
         collection.objects.link(ob)
-        write_pattern_attributes(ob, mesh)
+        write_pattern_attributes(ob, mesh, scene)
         if not creases:
             ob["cf_no_creases"] = True
         write_results(
@@ -288,7 +303,7 @@ def replace_fold_mesh(
         me.materials.append(mat)
     ob.data = me
     try:
-        write_pattern_attributes(ob, mesh)
+        write_pattern_attributes(ob, mesh, scene)
         ob.pop("cf_crease_topology", None)
         write_results(ob, mesh, positions, scene=scene, **results)
     except Exception:
@@ -315,9 +330,11 @@ def remove_fold_object(ob: bpy.types.Object | None, me: bpy.types.Mesh | None = 
         bpy.data.meshes.remove(me)
 
 
-def write_pattern_attributes(ob: bpy.types.Object, mesh: FoldMesh) -> None:
-    """Store the flat pattern on ``ob``'s mesh: ``cf_flat``, ``cf_assignment``, ``cf_fold_angle``, ``cf_face``..."""
+def write_pattern_attributes(ob: bpy.types.Object, mesh: FoldMesh, scene: bpy.types.Scene | None = None) -> None:
+    """Store the flat pattern on ``ob``'s mesh: ``cf_flat``, ``cf_assignment``, ``cf_fold_angle``, ``cf_face``...
+    and the unit it is in (:data:`FLAT_UNIT_KEY`)."""
     me = ob.data
+    me[FLAT_UNIT_KEY] = mm_per_unit(scene)
     perm = blender_edge_order(me, mesh)
     codes = assignment_codes(mesh.assignments)
     _set_attr(me, "cf_flat", "FLOAT2", "POINT", mesh.vertices.astype(np.float32), "vector")
@@ -446,7 +463,7 @@ def read_fold_mesh(ob: bpy.types.Object) -> FoldMesh:
         raise ValueError(f"'{getattr(ob, 'name', None)}' is not a mesh object")
     me = ob.data
     n, e, t = len(me.vertices), len(me.edges), len(me.polygons)
-    flat = _get_attr(me, "cf_flat", "vector", np.float32, n, 2).astype(np.float64)
+    flat = _get_attr(me, "cf_flat", "vector", np.float32, n, 2).astype(np.float64) * flat_rescale(me)
     edges = np.empty(2 * e, dtype=np.int64)
     me.edges.foreach_get("vertices", edges)
     edges = np.sort(edges.reshape(-1, 2), axis=1)

@@ -4,7 +4,8 @@ With Live off nothing re-folds by itself, so after a curve edit the folded mesh 
 stored mesh — no longer matches its curves. Fold and every rebuild from the curves store a *fingerprint* of the
 sources on the fold object (:data:`FINGERPRINT_KEY`, an ID property: it is saved in the .blend file and restored by
 undo): a hash of each source curve's control points and handles, spline types and cyclic flags, world matrix, role
-and fold angle, and of the scene's unit scale. :func:`sources_changed` compares it with the curves as they are now.
+and fold angle (not of the scene's unit scale, :data:`VERSION`). :func:`sources_changed` compares it with the
+curves as they are now.
 
 It runs lazily, when the panel is drawn, and only after something that can change the answer: the result is cached
 per fold object until a depsgraph update touches a curve object or a collection (:func:`on_depsgraph_update` only
@@ -46,15 +47,23 @@ def _curve_digest(ob: bpy.types.Object) -> bytes:
     return h.digest()
 
 
-def fingerprint(sources, scene: bpy.types.Scene | None = None) -> str:
-    """Fingerprint (hex) of the crease curve objects ``sources`` as they are now, independent of their order and
-    names (renaming a curve does not change the fold)."""
-    scene = scene or bpy.context.scene
+VERSION = "2:"
+"""Prefix of a fingerprint without the scene's unit scale. The first ones (no prefix) hashed it too, so switching
+Unit Scale said "source curves changed" although the fold does not change with it (the curves and the folded mesh
+keep their size in Blender units, ``mesh_object.flat_rescale``); they are still compared as they were made."""
+
+
+def fingerprint(sources, scene: bpy.types.Scene | None = None, *, with_unit_scale: bool = False) -> str:
+    """Fingerprint of the crease curve objects ``sources`` as they are now, independent of their order and names
+    (renaming a curve does not change the fold): :data:`VERSION` and a hex digest, or the first kind's digest alone
+    (``with_unit_scale``: the scene's unit scale hashed in)."""
     h = hashlib.blake2b(digest_size=16)
-    h.update(repr(float(scene.unit_settings.scale_length) if scene is not None else 1.0).encode())
+    if with_unit_scale:
+        scene = scene or bpy.context.scene
+        h.update(repr(float(scene.unit_settings.scale_length) if scene is not None else 1.0).encode())
     for digest in sorted(_curve_digest(ob) for ob in sources):
         h.update(digest)
-    return h.hexdigest()
+    return h.hexdigest() if with_unit_scale else VERSION + h.hexdigest()
 
 
 def record(ob: bpy.types.Object, value: str | None) -> None:
@@ -85,7 +94,8 @@ def sources_changed(ob: bpy.types.Object, scene: bpy.types.Scene | None = None) 
     if hit is not None and hit[0] == key:
         return hit[1]
     sources = source_objects(ob)
-    changed = bool(sources) and fingerprint(sources, scene) != stored
+    now = fingerprint(sources, scene, with_unit_scale=not str(stored).startswith(VERSION))
+    changed = bool(sources) and now != stored
     _cache[ob.name] = (key, changed)
     return changed
 

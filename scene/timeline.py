@@ -85,6 +85,7 @@ def mesh_key(ob: bpy.types.Object) -> str:
     tri = np.empty(len(me.loops), dtype=np.int32)
     me.loops.foreach_get("vertex_index", tri)
     h.update(tri.tobytes())
+    h.update(repr(mesh_object.flat_rescale(me)).encode())  # frames are in mm: a new Unit Scale solves them anew
     return h.hexdigest()
 
 

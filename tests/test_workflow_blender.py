@@ -444,3 +444,24 @@ def test_a_long_bake_converges_every_frame(extension, clean_scene):
             static = solver_mod.Solver(cache.mesh, settings).solve(entry.percent).positions
             fell_back += np.array_equal(entry.positions, static)
     assert fell_back >= 1
+
+
+def test_a_new_unit_scale_keeps_the_fold_the_size_of_its_curves(extension, clean_scene):
+    """Fold at Unit Scale 1, switch the scene to Unit Scale 0.001 (1 BU = 1 mm): the curves keep their size in
+    Blender units, so Re-solve, Bake and playback must too. The flat pattern is stored in the millimetres of the
+    fold's unit scale and was read back in the new one: a helper's 100 mm sheet came back 1000× larger than its
+    curves, and the notice blamed the curves ("source curves changed"), which were not touched."""
+    ob = fold_fixture("simpleVertex.svg")
+    state = ext_module(extension, "scene.source_state")
+    folded = mesh_positions(ob)
+    scene = bpy.context.scene
+    scene.unit_settings.scale_length = 0.001
+    bpy.context.view_layer.update()
+    assert not state.sources_changed(ob, scene)
+    assert bpy.ops.curved_fold.refold(rebuild="RESOLVE") == {"FINISHED"}
+    assert np.allclose(mesh_positions(ob), folded, atol=1e-4 * np.ptp(folded, axis=0).max())
+    baked = bake_from_flat(ob, 5)
+    assert np.allclose(baked, folded, atol=1e-3 * np.ptp(folded, axis=0).max())
+    scene.frame_set(3)  # playback between the keys: a shape between flat and folded, the sheet's size
+    mid = mesh_positions(ob.evaluated_get(bpy.context.evaluated_depsgraph_get()))
+    assert 0.5 < np.ptp(mid, axis=0)[:2].max() / np.ptp(folded, axis=0)[:2].max() < 2.0

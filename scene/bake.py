@@ -332,6 +332,7 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
         raise ValueError("the frame range is empty")
     props = ob.curved_fold_mesh
     name = ob.name
+    handle = jobs.ObjectHandle(ob)
     percents = percent_schedule(ob, frames)
     summary = BakeSummary(name, frames)
     dynamic = props.solver_mode == "DYNAMIC"
@@ -404,7 +405,9 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
         summary.ms = 1e3 * (time.perf_counter() - t0)
 
         def commit():
-            write_bake(bpy.data.objects[name], frames, positions, mesh, scene=scene)
+            target = handle.require("fold object")
+            write_bake(target, frames, positions, mesh, scene=scene)
+            summary.ob_name = target.name  # renamed while it baked: report the name it has now
             return summary
 
         return commit

@@ -387,7 +387,7 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
         raise PatternError("no crease curves selected: select curve objects that have a crease role")
     target = sources[0].users_collection[0] if sources[0].users_collection else bpy.context.scene.collection
     name = new_fold_name(sources, coll)
-    source_names = [s.name for s in sources]
+    source_handles = [jobs.ObjectHandle(s) for s in sources]
     coll_name = coll.name if coll is not None else None
     sources_fingerprint = source_state.fingerprint(sources, scene)  # the curves as this job reads them
     preview = jobs.MeshPreview(
@@ -405,7 +405,8 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
         out = yield from _solve_steps(mesh, solver_settings(None), pct, options.solver, warnings=warnings)
 
         def commit():
-            ob = create_fold(out, [bpy.data.objects[n] for n in source_names], coll_name, options, target, scene)
+            now = [h.require("crease curve") for h in source_handles]
+            ob = create_fold(out, now, coll_name, options, target, scene)
             source_state.record(ob, sources_fingerprint)
             return ob, out
 
@@ -498,6 +499,7 @@ def refold_job(
     if rebuild and not sources:
         raise PatternError(f"'{ob.name}' has no source crease curves left to rebuild from")
     name = ob.name
+    handle = jobs.ObjectHandle(ob)
     sources_fingerprint = source_state.fingerprint(sources, scene) if rebuild else None  # as this job reads them
     stored = mesh_object.read_fold_mesh(ob)
     start = current_positions(ob, scene) if warm_start else None
@@ -526,7 +528,7 @@ def refold_job(
         constraints = None if remesh else held  # pins and glue name vertices of the stored mesh
         out = yield from _solve_steps(mesh, settings, pct, method, start=x0, warnings=warnings, constraints=constraints)
         return lambda: write_refold(
-            bpy.data.objects[name],
+            handle.require("fold object"),
             out,
             remesh=remesh,
             keep_bake=live,

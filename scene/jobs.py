@@ -43,6 +43,32 @@ class JobBusyError(RuntimeError):
     """A job is already running on this folded object (one job per object)."""
 
 
+class ObjectHandle:
+    """An object a job works on, found again if it is renamed while the job runs: by name, else by its
+    ``session_uid`` (kept across renames and undo). A bake of a big pattern takes seconds, and renaming the folded
+    mesh in the Outliner meanwhile made every later lookup by name fail (a KeyError out of the modal operator,
+    the bake lost)."""
+
+    def __init__(self, ob: bpy.types.Object):
+        self.name, self.uid = ob.name, ob.session_uid
+
+    def get(self) -> bpy.types.Object | None:
+        """The object, or ``None`` if it was deleted."""
+        ob = bpy.data.objects.get(self.name)
+        if ob is None or ob.session_uid != self.uid:
+            ob = next((o for o in bpy.data.objects if o.session_uid == self.uid), None)
+        if ob is not None:
+            self.name = ob.name
+        return ob
+
+    def require(self, what: str = "object") -> bpy.types.Object:
+        """The object; a :class:`RuntimeError` naming it (one line for the user) if it was deleted."""
+        ob = self.get()
+        if ob is None:
+            raise RuntimeError(f"the {what} '{self.name}' was deleted while the job ran; nothing was written")
+        return ob
+
+
 @dataclass
 class Progress:
     """Where a job is: its ``stage`` ("start", "discretise", "mesh", "model", "solve", "figures", "frame"), the solver
@@ -88,7 +114,7 @@ class PositionsPreview:
     hide the preview, so the preview mutes it) and the points of the crease-curve children."""
 
     def __init__(self, ob: bpy.types.Object, scene: bpy.types.Scene | None = None):
-        self.ob_name = ob.name
+        self.handle = ObjectHandle(ob)
         self.scene = scene
         me = ob.data
         self.n = len(me.vertices)
@@ -113,7 +139,7 @@ class PositionsPreview:
 
     @property
     def ob(self) -> bpy.types.Object | None:
-        return bpy.data.objects.get(self.ob_name)
+        return self.handle.get()
 
     def show(self, positions_mm: np.ndarray) -> None:
         ob = self.ob
@@ -162,13 +188,13 @@ class MeshPreview:
         scene: bpy.types.Scene | None = None,
     ):
         self.name = name
-        self.ob_name = ob.name if ob is not None else None
+        self.handle = ObjectHandle(ob) if ob is not None else None
         self.collection = collection
         self.place = place
         self.scene = scene
         self.mesh = None
         self.me_name: str | None = None
-        self.tmp_ob_name: str | None = None
+        self.tmp: ObjectHandle | None = None
         self.old_me_name: str | None = None
 
     def set_mesh(self, mesh) -> None:
@@ -178,8 +204,8 @@ class MeshPreview:
     def _make(self, positions_mm: np.ndarray) -> None:
         me = mesh_object._new_mesh_data(self.mesh, positions_mm, f"{self.name} (folding)", self.scene)
         self.me_name = me.name
-        if self.ob_name is not None:
-            ob = bpy.data.objects[self.ob_name]
+        if self.handle is not None:
+            ob = self.handle.require()
             self.old_me_name = ob.data.name
             for mat in ob.data.materials:
                 me.materials.append(mat)
@@ -187,7 +213,7 @@ class MeshPreview:
         else:
             ob = bpy.data.objects.new(f"{self.name} (folding)", me)
             (self.collection or bpy.context.scene.collection).objects.link(ob)
-            self.tmp_ob_name = ob.name
+            self.tmp = ObjectHandle(ob)
             if self.place is not None:
                 self.place(ob)
 
@@ -207,19 +233,19 @@ class MeshPreview:
     def restore(self) -> None:
         if self.me_name is None:
             return
-        if self.ob_name is not None and self.old_me_name is not None:
-            ob = bpy.data.objects.get(self.ob_name)
+        if self.handle is not None and self.old_me_name is not None:
+            ob = self.handle.get()
             old = bpy.data.meshes.get(self.old_me_name)
             if ob is not None and old is not None:
                 ob.data = old
-        if self.tmp_ob_name is not None:
-            tmp = bpy.data.objects.get(self.tmp_ob_name)
+        if self.tmp is not None:
+            tmp = self.tmp.get()
             if tmp is not None:
                 bpy.data.objects.remove(tmp)
         me = bpy.data.meshes.get(self.me_name)
         if me is not None and me.users == 0:
             bpy.data.meshes.remove(me)
-        self.me_name = self.tmp_ob_name = self.old_me_name = None
+        self.me_name = self.tmp = self.old_me_name = None
 
 
 class Job:

@@ -387,3 +387,48 @@ def test_a_slice_stops_before_a_unit_of_a_longer_kind():
     for k in range(first_b + 1, current[0] + 1):
         kinds = [kind for j, kind in ran if j == k]
         assert not ("a" in kinds and "b" in kinds[kinds.index("a") :]), (k, kinds)
+
+
+def test_renaming_or_deleting_while_a_job_runs(folded, extension, monkeypatch):
+    """A bake or fold of a big pattern takes seconds, and the user renames things in the Outliner meanwhile. Jobs
+    found their objects by name: renaming the folded mesh during a bake, or a crease curve during a fold, raised a
+    KeyError out of the modal operator (a traceback, the work lost, the timer and status text left behind). They
+    now follow the renamed objects; one deleted under a running job ends it with one line and the scene as it was
+    (the modal handler reports any other exception the same way)."""
+    ob, border, crease = folded
+    jobs = mod(extension, "scene.jobs")
+    bake = mod(extension, "scene.bake")
+    folding = mod(extension, "scene.folding")
+    scene = bpy.context.scene
+    job = jobs.start(bake.bake_job(ob, [1, 2, 3], scene=scene))
+    run_slices_until(jobs, job, "frame")
+    ob.name = "Paper Boat"
+    summary = jobs.run_to_end(job)
+    assert summary.ob_name == "Paper Boat" and len(bake.baked_frames(ob)) == 3
+    job = jobs.start(folding.fold_job([border, crease], None, folding.FoldOptions(), scene=scene))
+    run_slices_until(jobs, job, "solve")
+    crease.name = "Valley S"
+    made, _ = jobs.run_to_end(job)
+    assert {s.object.name for s in made.curved_fold_mesh.sources} >= {"Valley S"}
+    # deleted under a running re-fold: the modal handler ends it with one line, the scene as it was
+    job_modal = mod(extension, "operators.job_modal")
+    reports = []
+
+    class Runner(job_modal.JobOperator):
+        failure = "Re-fold failed"
+
+        def report(self, kind, text):
+            reports.append((next(iter(kind)), text))
+
+    monkeypatch.setattr(jobs, "SLICE_MS", 0.0)
+    runner = Runner()
+    runner._job = jobs.start(folding.refold_job(made, rebuild=False))
+    assert runner.modal(bpy.context, _Event("TIMER")) == {"RUNNING_MODAL"}
+    name = made.name
+    bpy.data.objects.remove(made)
+    while (state := runner.modal(bpy.context, _Event("TIMER"))) == {"RUNNING_MODAL"}:
+        pass
+    assert state == {"CANCELLED"} and reports[-1][0] == "ERROR"
+    assert (
+        reports[-1][1] == f"Re-fold failed: the fold object '{name}' was deleted while the job ran; nothing was written"
+    )

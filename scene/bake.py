@@ -263,15 +263,38 @@ def forget_stale(ob: bpy.types.Object) -> None:
 
 
 def percent_schedule(ob: bpy.types.Object, frames: Sequence[int]) -> np.ndarray:
-    """Fold percent (fraction) per frame: the keyframed ``curved_fold_mesh.fold_percent`` if animated, else a
-    linear ramp from 0 to the set percent over ``frames``."""
+    """Fold percent (fraction) per frame: the keyframed ``curved_fold_mesh.fold_percent`` if animated; the set
+    percent on every frame if other fold settings are keyed (as playback folds them); else a linear ramp from 0 to
+    the set percent over ``frames``."""
     props = ob.curved_fold_mesh
     fc = percent_fcurve(ob)
     if fc is not None:
         return np.clip(np.array([fc.evaluate(f) for f in frames], dtype=np.float64) / 100.0, 0.0, 1.0)
-    if len(frames) == 1:
-        return np.array([props.fold_percent / 100.0])
+    if len(frames) == 1 or any(f.data_path.startswith("curved_fold_mesh.") for f in _fcurves(ob)):
+        # other settings keyed, the percent not: playback holds the percent while they change, and so does the bake
+        return np.full(len(frames), props.fold_percent / 100.0)
     return np.linspace(0.0, props.fold_percent / 100.0, len(frames))
+
+
+def settings_at(ob: bpy.types.Object, frame: int, settings):
+    """``settings`` (a frozen copy of the solver settings, ``timeline.frozen_settings``) with every keyframed one of
+    them evaluated at ``frame``: what playback folds that frame with. A bake solved every frame with the settings
+    of the frame Bake was pressed on, so keyed stiffnesses played one way and baked another (a helper: z-extent
+    0.0000 baked against 0.0435 played at frame 1)."""
+    keyed = {
+        f.data_path.split(".", 1)[1]: f
+        for f in _fcurves(ob)
+        if f.data_path.startswith("curved_fold_mesh.") and f.data_path.split(".", 1)[1] in vars(settings)
+    }
+    if not keyed:
+        return settings
+    from types import SimpleNamespace
+
+    values = dict(vars(settings))
+    for name, fc in keyed.items():
+        value = fc.evaluate(frame)
+        values[name] = value > 0.5 if isinstance(values[name], bool) else float(value)
+    return SimpleNamespace(**values)
 
 
 def percent_fcurve(ob: bpy.types.Object):
@@ -341,6 +364,7 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
     settings = folding.solver_settings(props)
     steps_per_frame = int(props.steps_per_frame)
     props = timeline.frozen_settings(props)  # the job solves with the settings of its start
+    frame_settings = [settings_at(ob, f, props) for f in frames]  # keyed ones as each frame plays them
     n = len(frames)
 
     def steps():
@@ -381,13 +405,14 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
                 positions.append(np.asarray(x, dtype=np.float64))
         else:
             for i, f in enumerate(frames):
-                hit = cache.get(f, float(percents[i]), props)
+                now = frame_settings[i]
+                hit = cache.get(f, float(percents[i]), now)
                 if hit is not None and hit.converged:
                     summary.cached += 1
                     entry = hit
                 else:  # playback's frames from the path are capped; a bake gives them the whole budget
                     entry = yield from cache.solve_steps(
-                        f, float(percents[i]), props, frame_index=i, n_frames=n, path_budget=None
+                        f, float(percents[i]), now, frame_index=i, n_frames=n, path_budget=None
                     )
                     summary.iterations += entry.iterations
                 if not entry.converged:

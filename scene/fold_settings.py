@@ -127,17 +127,20 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
         description="Fold every mountain and valley crease of this mesh to the angle below, whatever angle its "
         "curve has (the curves are not changed)",
         default=False,
+        options=set(),
         update=_live_update,
     )
     fold_angle: FloatProperty(
         name="Fold Angle",
         description="Fold angle of every mountain and valley crease when Override Crease Angles is on (0° flat, "
-        "180° folded flat); the sign comes from the role",
+        "180° folded flat); the sign comes from the role. Not animatable: it is part of the pattern (animate Fold "
+        "Percent instead)",
         default=math.pi,
         min=0.0,
         max=math.pi,
         subtype="ANGLE",
         unit="ROTATION",
+        options=set(),  # keys on it did nothing (playback and bake fold the stored pattern's angles)
         update=_live_update,
     )
     fold_percent: FloatProperty(

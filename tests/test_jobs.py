@@ -432,3 +432,29 @@ def test_renaming_or_deleting_while_a_job_runs(folded, extension, monkeypatch):
     assert (
         reports[-1][1] == f"Re-fold failed: the fold object '{name}' was deleted while the job ran; nothing was written"
     )
+
+
+def test_a_bake_folds_keyed_settings_as_playback_does(folded, extension):
+    """Crease stiffness keyed from 0.2 at frame 1 to 2.0 at frame 3, Fold Percent not keyed: playback folds each
+    frame at the set percent with that frame's stiffness, and the bake must write the same shapes. It solved every
+    frame with the stiffness of the frame Bake was pressed on and ramped the percent from 0 (a helper: frame 1 baked
+    flat, played folded). Override Crease Angles' angle is part of the pattern and cannot be keyed (its keys did
+    nothing)."""
+    ob, _, _ = folded
+    props = ob.curved_fold_mesh
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 3
+    props.crease_stiffness = 0.2
+    props.keyframe_insert("crease_stiffness", frame=1)
+    props.crease_stiffness = 2.0
+    props.keyframe_insert("crease_stiffness", frame=3)
+    played = []
+    for f in (1, 2, 3):
+        scene.frame_set(f)
+        played.append(evaluated_mm(ob))
+    assert np.abs(played[0] - played[2]).max() > 1e-3  # the stiffness changes the shape
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    for f, shape in zip((1, 2, 3), played, strict=True):
+        scene.frame_set(f)
+        assert np.abs(evaluated_mm(ob) - shape).max() <= 1e-3 * np.ptp(shape, axis=0).max(), f
+    assert not type(props).bl_rna.properties["fold_angle"].is_animatable

@@ -566,7 +566,9 @@ def _world_box(ob: bpy.types.Object) -> np.ndarray:
 
 def place_beside(ob: bpy.types.Object, sources: list[bpy.types.Object], view_layer=None) -> None:
     """Move the new folded mesh ``ob`` to the right of its source curves and of every folded mesh already made from
-    them, with a gap, so a new Fold never overlaps the last one; y is aligned with the curves."""
+    them, with a gap, so a new Fold never overlaps the last one; y is aligned with the curves. If that spot overlaps
+    another mesh or curve in the view layer (a second sheet drawn beside the first), it moves further right, past
+    what it meets (a helper's fold of one of two sheets side by side landed on the other's curves)."""
     view_layer = view_layer or bpy.context.view_layer
     view_layer.update()
     source_set = {s.name for s in sources}
@@ -583,5 +585,21 @@ def place_beside(ob: bpy.types.Object, sources: list[bpy.types.Object], view_lay
     right, bottom = float(boxes[:, 1, 0].max()), float(boxes[:, 0, 1].min())
     own = _world_box(ob)
     width = float(own[1, 0] - own[0, 0])
-    ob.location.x += right + PLACEMENT_GAP * width - float(own[0, 0])
-    ob.location.y += bottom - float(own[0, 1])
+    dx = right + PLACEMENT_GAP * width - float(own[0, 0])
+    dy = bottom - float(own[0, 1])
+    # and clear of everything else drawn there (a second sheet beside the first): further right, past what it meets
+    placed = set(others) | {ob}
+    blockers = [
+        o for o in view_layer.objects if o.type in {"MESH", "CURVE"} and o not in placed and o.parent not in placed
+    ]
+    if blockers:
+        walls = np.array([_world_box(o) for o in blockers])
+        size = own[1] - own[0]
+        for _ in range(len(blockers)):
+            lo = own[0] + (dx, dy)
+            hit = np.all((walls[:, 0] < lo + size) & (walls[:, 1] > lo), axis=1)
+            if not hit.any():
+                break
+            dx = float(walls[hit, 1, 0].max()) + PLACEMENT_GAP * width - float(own[0, 0])
+    ob.location.x += dx
+    ob.location.y += dy

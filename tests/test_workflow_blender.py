@@ -236,6 +236,13 @@ def test_live_refolds_on_a_stiffness_change(extension, clean_scene):
     props.live = False
 
 
+def x_extent(ob) -> tuple[float, float]:
+    """World x extent (min, max) of ``ob``'s bounding box."""
+    m = np.array(ob.matrix_world)
+    c = np.array([tuple(v) for v in ob.bound_box]) @ m[:3, :3].T + m[:3, 3]
+    return c[:, 0].min(), c[:, 0].max()
+
+
 def test_folds_are_named_after_the_pattern_and_placed_beside_the_last(extension, clean_scene):
     objects = import_file(REPO / "examples" / "single_curve.svg")
     made = []
@@ -249,14 +256,26 @@ def test_folds_are_named_after_the_pattern_and_placed_beside_the_last(extension,
     assert made[0].name == "single_curve Folded" and made[1].name.startswith("single_curve Folded")
     bpy.context.view_layer.update()
 
-    def box(ob):
-        m = np.array(ob.matrix_world)
-        c = np.array([tuple(v) for v in ob.bound_box]) @ m[:3, :3].T + m[:3, 3]
-        return c[:, 0].min(), c[:, 0].max()
+    curves_right = max(x_extent(ob)[1] for ob in objects)
+    assert x_extent(made[0])[0] > curves_right
+    assert x_extent(made[1])[0] > x_extent(made[0])[1]  # no overlap with the last fold
 
-    curves_right = max(box(ob)[1] for ob in objects)
-    assert box(made[0])[0] > curves_right
-    assert box(made[1])[0] > box(made[0])[1]  # no overlap with the last fold
+
+def test_a_fold_is_placed_clear_of_another_sheet_beside_its_curves(extension, clean_scene):
+    """Two sheets drawn side by side: a fold of the first goes right of its curves, and further right past the
+    second sheet when that spot is taken (it was placed on the second sheet's curves, a helper's report)."""
+    first = import_file(REPO / "examples" / "single_curve.svg")
+    second = import_file(REPO / "examples" / "curved_pleats.svg")
+    bpy.context.view_layer.update()
+
+    right = max(x_extent(ob)[1] for ob in first)
+    shift = right + 0.05 * (right - min(x_extent(ob)[0] for ob in first)) - min(x_extent(ob)[0] for ob in second)
+    for ob in second:
+        ob.location.x += shift
+    bpy.context.view_layer.update()
+    assert bpy.ops.curved_fold.fold(collection="single_curve") == {"FINISHED"}
+    bpy.context.view_layer.update()
+    assert x_extent(bpy.context.active_object)[0] > max(x_extent(ob)[1] for ob in second)
 
 
 def test_exported_gltf_node_keeps_the_object_name(extension, clean_scene, tmp_path):

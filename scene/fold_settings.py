@@ -96,8 +96,7 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
         description="Largest chord length of the discretised curves and borders (0 = automatic: the paper's 7 mm "
         "per 150 mm of sheet)",
         default=0.0,
-        min=0.0,
-        soft_max=0.05,
+        min=0.0,  # no soft_max: in Blender units it meant 50 mm at Unit Scale 1 but 0.05 mm at 0.001
         precision=4,
         subtype="DISTANCE",
         unit="LENGTH",
@@ -109,7 +108,6 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
         "of sheet)",
         default=0.0,
         min=0.0,
-        soft_max=0.005,
         precision=5,
         subtype="DISTANCE",
         unit="LENGTH",

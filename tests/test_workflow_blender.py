@@ -484,3 +484,12 @@ def test_a_new_unit_scale_keeps_the_fold_the_size_of_its_curves(extension, clean
     scene.frame_set(3)  # playback between the keys: a shape between flat and folded, the sheet's size
     mid = mesh_positions(ob.evaluated_get(bpy.context.evaluated_depsgraph_get()))
     assert 0.5 < np.ptp(mid, axis=0)[:2].max() / np.ptp(folded, axis=0)[:2].max() < 2.0
+
+
+def test_interval_and_tolerance_sliders_do_not_stop_at_a_fixed_length(extension):
+    """Their slider limits were 0.05 and 0.005 Blender units: 50 mm at Unit Scale 1, but 0.05 mm at Unit Scale 0.001,
+    far below the automatic 7 mm there (a helper's report). Lengths in Blender units cannot have one limit for every
+    scale, so they have none (as the Fold operator's own fields)."""
+    rna = bpy.types.Object.bl_rna.properties["curved_fold_mesh"].fixed_type.properties
+    for name in ("interval", "tolerance"):
+        assert rna[name].soft_max >= 1e6, (name, rna[name].soft_max)

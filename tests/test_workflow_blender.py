@@ -493,3 +493,27 @@ def test_interval_and_tolerance_sliders_do_not_stop_at_a_fixed_length(extension)
     rna = bpy.types.Object.bl_rna.properties["curved_fold_mesh"].fixed_type.properties
     for name in ("interval", "tolerance"):
         assert rna[name].soft_max >= 1e6, (name, rna[name].soft_max)
+
+
+def test_deleting_a_folded_mesh_deletes_its_crease_curves(extension, clean_scene):
+    """Object ▸ Delete on a folded mesh: its red/blue crease curves (children that cannot be selected) go with it.
+    Blender keeps a deleted object's children, unparented: they stayed in the viewport, folded in mid-air, and could
+    not be clicked to delete them (a helper's report). The depsgraph handler schedules their removal on a timer
+    (timers do not fire headless: the test runs the timer's call itself); removing them inside the handler freed IDs
+    that the update's list still named."""
+    orphans = ext_module(extension, "scene.crease_orphans")
+    ob = fold_fixture("curvedPleatSimple.svg")
+    creases = [c.name for c in ob.children if "cf_crease_role" in c]
+    assert creases
+    for other in bpy.context.selected_objects:
+        other.select_set(False)
+    ob.select_set(True)
+    bpy.context.view_layer.objects.active = ob
+    assert bpy.ops.object.delete() == {"FINISHED"}
+    bpy.context.view_layer.update()
+    assert bpy.app.timers.is_registered(orphans._removal)
+    assert all(name in bpy.data.objects for name in creases)  # nothing removed inside the depsgraph update
+    orphans._removal()
+    bpy.app.timers.unregister(orphans._removal)
+    assert not any(name in bpy.data.objects for name in creases)
+    assert not orphans.orphaned_crease_curves()

@@ -137,13 +137,16 @@ def _estimate_pieces(seg: CurveSegment, interval: float, tolerance: float) -> fl
     return max(length / interval, by_tol, 1.0)
 
 
-def _point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _segment_foot(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise, the point of segment ``a → b`` nearest ``p`` (``a`` for a segment of no length)."""
     ab = b - a
     ll = np.einsum("ij,ij->i", ab, ab)
     t = np.where(ll > 0, np.einsum("ij,ij->i", p - a, ab) / np.where(ll > 0, ll, 1.0), 0.0)
-    t = np.clip(t, 0.0, 1.0)
-    q = a + t[:, None] * ab
-    return np.hypot(*(p - q).T)
+    return a + np.clip(t, 0.0, 1.0)[:, None] * ab
+
+
+def _point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.hypot(*(p - _segment_foot(p, a, b)).T)
 
 
 def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budget: int = MAX_SEGMENTS) -> np.ndarray:
@@ -1163,26 +1166,28 @@ def _snap_short_ends(
     if not loose.any():
         return verts, edges, attrs
     reach = SHORT_OF_BORDER_FRACTION * size
+    which, sides = np.nonzero(loose)
+    ba, bb = verts[edges[assign == "B", 0]], verts[edges[assign == "B", 1]]
+    gaps = np.array([_point_segment_distance(np.broadcast_to(q, ba.shape), ba, bb).min() for q in verts[edges[loose]]])
+    short = (gaps > 0.0) & (gaps <= reach)
+    if not short.any():
+        return verts, edges, attrs
     new_verts: list[np.ndarray] = []
     extra_edges: list[tuple[int, int]] = []
     extra_attrs: list[int] = []
     edges, attrs = edges.copy(), attrs.copy()
     moved: list[tuple[float, np.ndarray, int]] = []
-    for w, side in zip(*np.nonzero(loose), strict=True):
+    for w, side in zip(which[short], sides[short], strict=True):  # the border as split by the ends before
         all_e = np.concatenate([edges, np.array(extra_edges, dtype=edges.dtype).reshape(-1, 2)])
         all_a = np.concatenate([attrs, np.array(extra_attrs, dtype=attrs.dtype)])
         pts = np.concatenate([verts, np.array(new_verts).reshape(-1, 2)])
         border = np.flatnonzero(pieces.assignment[all_a] == "B")
         p = pts[edges[w, side]]
         a, b = pts[all_e[border, 0]], pts[all_e[border, 1]]
-        d = b - a
-        t = np.clip(np.einsum("ij,ij->i", p - a, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0.0, 1.0)
-        foot = a + t[:, None] * d
+        foot = _segment_foot(np.broadcast_to(p, a.shape), a, b)
         dist = np.hypot(*(p - foot).T)
         k = int(np.argmin(dist))
         gap = float(dist[k])
-        if gap == 0.0 or gap > reach:
-            continue
         e, q = int(border[k]), foot[k]
         ends = all_e[e]
         near = np.hypot(*(pts[ends] - q).T)

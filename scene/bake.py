@@ -276,25 +276,28 @@ def percent_schedule(ob: bpy.types.Object, frames: Sequence[int]) -> np.ndarray:
     return np.linspace(0.0, props.fold_percent / 100.0, len(frames))
 
 
-def settings_at(ob: bpy.types.Object, frame: int, settings):
-    """``settings`` (a frozen copy of the solver settings, ``timeline.frozen_settings``) with every keyframed one of
-    them evaluated at ``frame``: what playback folds that frame with. A bake solved every frame with the settings
-    of the frame Bake was pressed on, so keyed stiffnesses played one way and baked another (a helper: z-extent
-    0.0000 baked against 0.0435 played at frame 1)."""
-    keyed = {
-        f.data_path.split(".", 1)[1]: f
-        for f in _fcurves(ob)
-        if f.data_path.startswith("curved_fold_mesh.") and f.data_path.split(".", 1)[1] in vars(settings)
-    }
+def settings_per_frame(ob: bpy.types.Object, frames: Sequence[int], settings) -> list:
+    """``settings`` (a frozen copy of the solver settings, ``timeline.frozen_settings``) for each of ``frames``, with
+    every keyframed one of them evaluated there: what playback folds that frame with. A bake solved every frame with
+    the settings of the frame Bake was pressed on, so keyed stiffnesses played one way and baked another (a helper:
+    z-extent 0.0000 baked against 0.0435 played at frame 1)."""
+    keyed = {}
+    for f in _fcurves(ob):
+        owner, _, name = f.data_path.partition(".")
+        if owner == "curved_fold_mesh" and name in vars(settings):
+            keyed[name] = f
     if not keyed:
-        return settings
+        return [settings] * len(frames)
     from types import SimpleNamespace
 
-    values = dict(vars(settings))
-    for name, fc in keyed.items():
-        value = fc.evaluate(frame)
-        values[name] = value > 0.5 if isinstance(values[name], bool) else float(value)
-    return SimpleNamespace(**values)
+    out = []
+    for frame in frames:
+        values = dict(vars(settings))
+        for name, fc in keyed.items():
+            value = fc.evaluate(frame)
+            values[name] = value > 0.5 if isinstance(values[name], bool) else float(value)
+        out.append(SimpleNamespace(**values))
+    return out
 
 
 def percent_fcurve(ob: bpy.types.Object):
@@ -364,7 +367,7 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
     settings = folding.solver_settings(props)
     steps_per_frame = int(props.steps_per_frame)
     props = timeline.frozen_settings(props)  # the job solves with the settings of its start
-    frame_settings = [settings_at(ob, f, props) for f in frames]  # keyed ones as each frame plays them
+    frame_settings = settings_per_frame(ob, frames, props)  # keyed ones as each frame plays them
     n = len(frames)
 
     def steps():

@@ -32,8 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from ..mesh.fold_mesh import FoldMesh, polygon_sides
-from .mesh_quality import SLIVER_DEG, corner_angles
+from ..mesh.fold_mesh import FoldMesh, corner_angles, polygon_sides
+from .mesh_quality import SLIVER_DEG
 
 FOLDED_FRACTION = 0.5
 """A crease piece folded less than this fraction of its (capped) target at the fold percent stays flat."""

@@ -21,6 +21,7 @@ from curved_fold.core.pattern.discretize import (
     sheet_size,
 )
 from curved_fold.core.pattern.model import CreaseCurve, CurveSegment, PatternError
+from curved_fold.core.pattern.polylines import flattened_curves
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 FIXTURE_FILES = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
@@ -461,3 +462,92 @@ def test_curve_samples_a_hair_from_a_junction_are_removed_within_tolerance(monke
     for p in gone:
         d = disc._point_segment_distance(np.repeat(p[None], len(a), axis=0), a, b).min()
         assert d <= tolerance
+
+
+# ------------------------------------------------------------------------------------------------ flattened curves
+
+
+def _arc_points(n: int) -> np.ndarray:
+    """``n + 1`` points of an arc of radius 100 mm about (−40, 50), from the bottom to the top side of the 100 mm
+    square: a crease across the sheet, turning 3.75° per piece for ``n`` = 16."""
+    t = np.linspace(-math.pi / 6, math.pi / 6, n + 1)
+    return np.column_stack([-40.0 + 100.0 * np.cos(t), 50.0 + 100.0 * np.sin(t)])
+
+
+def _svg_lines(points: np.ndarray, stroke: str, opacity: float = 0.5) -> str:
+    """One Origami Simulator ``<line>`` per piece (coordinates as ``repr``, y up → SVG's y down)."""
+    return "\n".join(
+        f'<line stroke="{stroke}" opacity="{opacity}" x1="{a[0]!r}" y1="{100 - a[1]!r}" '
+        f'x2="{b[0]!r}" y2="{100 - b[1]!r}"/>'
+        for a, b in zip(points[:-1].tolist(), points[1:].tolist(), strict=True)
+    )
+
+
+def _points_attr(points: np.ndarray) -> str:
+    return " ".join(f"{x!r},{100 - y!r}" for x, y in points.tolist())
+
+
+def test_curves_drawn_as_polylines_or_lines_are_curve_pieces() -> None:
+    """Paper §3.3 scores only curve pieces: a curve drawn as a polyline (a tool that flattens Béziers) or as
+    separate ``<line>`` elements (Origami Simulator's files) is one; a straight crease cut into pieces, a zigzag
+    with corners and a stroke with a Bézier in it (whose straight pieces say they are straight) are not."""
+    arc = _arc_points(16)
+    straight = np.array([(10.0, 20.0), (30.0, 20.0), (50.0, 20.0), (70.0, 20.0)])
+    zigzag = np.array([(10.0, 70.0), (20.0, 80.0), (30.0, 70.0), (40.0, 80.0)])  # 90° turns
+    body = (
+        '<rect stroke="#000000" fill="none" x="0" y="0" width="100" height="100"/>\n'
+        f'<polyline stroke="#ff0000" opacity="0.5" fill="none" points="{_points_attr(arc)}"/>\n'
+        f'<polyline stroke="#0000ff" opacity="0.5" fill="none" points="{_points_attr(straight)}"/>\n'
+        f'<polyline stroke="#0000ff" opacity="0.5" fill="none" points="{_points_attr(zigzag)}"/>\n'
+        '<path stroke="#ff0000" opacity="0.25" fill="none" d="M 80 100 L 85 90 C 90 80 90 70 85 60 L 100 50"/>\n'
+    )
+    head = '<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" viewBox="0 0 100 100">\n'
+    p = discretize(parse_svg_text(head + body + "</svg>").curves)
+    v = p.vertices - p.vertices.min(axis=0)  # the sheet's corner at the origin, as drawn (SVG's y down → y up)
+    a, b = v[p.edges[:, 0]], v[p.edges[:, 1]]
+    mid = 0.5 * (a + b)
+    on_arc = (p.assignments == "M") & (np.abs(np.hypot(mid[:, 0] + 40, mid[:, 1] - 50) - 100) < 1.0)
+    assert on_arc.sum() == 17 and p.edge_from_curve[on_arc].all()  # 16 pieces, one split where the V crosses
+    assert not p.edge_from_curve[p.assignments == "V"].any()  # the straight crease and the zigzag
+    assert not p.edge_from_curve[p.assignments == "B"].any()
+    path_lines = (p.assignments == "M") & ~on_arc & (np.hypot(*(b - a).T) > 4)  # the path's two L pieces
+    assert path_lines.sum() == 2 and not p.edge_from_curve[path_lines].any()
+    # the same arc as separate <line> elements, as Origami Simulator writes it
+    lines = discretize(
+        parse_svg_text(head + body.splitlines()[0] + "\n" + _svg_lines(arc, "#ff0000") + "</svg>").curves
+    )
+    assert lines.count("M") == 16 and lines.edge_from_curve[lines.assignments == "M"].all()
+
+
+def test_flattened_curves_need_one_role_and_angle_and_no_facet_lines() -> None:
+    """A chain runs only through vertices where two segments of one assignment and angle meet: an arc whose
+    vertices carry facet lines, or whose two halves fold to different angles, is judged piece by chain; a closed
+    polygon of a curve is a curve, a square (90° corners) is not."""
+    arc = _arc_points(16)
+    n = len(arc)
+    edges = np.column_stack([np.arange(n - 1), np.arange(1, n)])
+    role = np.array(["M"] * (n - 1))
+    angle = np.full(n - 1, -90.0)
+    assert flattened_curves(arc, edges, role, angle, 0.07).all()
+    assert not flattened_curves(arc, edges, role, angle, 100.0).any()  # within the tolerance of one chord
+    # a facet line at every inner vertex: no vertex where exactly two meet
+    hub = np.vstack([arc, [[80.0, 50.0]]])
+    facets = np.column_stack([np.arange(1, n - 1), np.full(n - 2, n)])
+    both = np.vstack([edges, facets])
+    flags = flattened_curves(hub, both, np.r_[role, ["F"] * (n - 2)], np.r_[angle, np.zeros(n - 2)], 0.07)
+    assert not flags.any()
+    # two halves at different angles: two chains, each still a curve
+    angle2 = np.where(np.arange(n - 1) < 8, -90.0, -60.0)
+    assert flattened_curves(arc, edges, role, angle2, 0.07).all()
+    # two halves of one straight line at different angles, meeting at the midpoint: straight
+    line_pts = np.column_stack([np.linspace(0, 100, 9), np.full(9, 50.0)])
+    line_edges = np.column_stack([np.arange(8), np.arange(1, 9)])
+    assert not flattened_curves(line_pts, line_edges, np.array(["V"] * 8), np.full(8, 90.0), 0.07).any()
+    # closed: a 24-gon is a curve; a square is not
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    ring = np.column_stack([50 + 30 * np.cos(t), 50 + 30 * np.sin(t)])
+    loop = np.column_stack([np.arange(24), (np.arange(24) + 1) % 24])
+    assert flattened_curves(ring, loop, np.array(["V"] * 24), np.full(24, 45.0), 0.07).all()
+    sq = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])
+    sq_edges = np.array([(0, 1), (1, 2), (2, 3), (3, 0)])
+    assert not flattened_curves(sq, sq_edges, np.array(["B"] * 4), np.full(4, np.nan), 0.07).any()

@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from curved_fold.core.io.reader import read_pattern
 from curved_fold.core.mesh.build import build_mesh
 from curved_fold.core.mesh.ruling import EndpointScorer, ruling_swaps
 from curved_fold.core.mesh.triangulate import constrained_triangulation
 from tests.analytic import bisector_case
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 SVGS = sorted(FIXTURES.glob("*.svg"))
 
 
@@ -195,3 +198,57 @@ def test_ruling_mesh_has_no_sliver_beyond_what_the_pattern_forces(path: Path) ->
     assert cdt["smallest_corner_deg"] == pytest.approx(forced)
     assert ruling["smallest_corner_deg"] >= min(forced, SWAP_MIN_CORNER_DEG) - 1e-9
     assert ruling["corners_below_1deg"] <= cdt["corners_below_1deg"]
+
+
+def _as_lines_svg(pattern) -> str:
+    """``pattern``'s segments as separate Origami Simulator ``<line>`` elements (opacity = |fold angle| / 180),
+    coordinates written exactly: what Origami Simulator, or a tool that flattens curves, gives us."""
+    stroke = {"B": "#000000", "M": "#ff0000", "V": "#0000ff", "F": "#ffff00"}
+    v = pattern.vertices - pattern.vertices.min(axis=0)
+    h = float(v[:, 1].max())
+    rows = []
+    table = zip(pattern.edges.tolist(), pattern.assignments.tolist(), pattern.fold_angles.tolist(), strict=True)
+    for (i, j), a, angle in table:
+        (x1, y1), (x2, y2) = v[i].tolist(), v[j].tolist()
+        opacity = f' opacity="{abs(angle) / 180.0!r}"' if a in "MV" and math.isfinite(angle) else ""
+        rows.append(f'<line stroke="{stroke[a]}"{opacity} x1="{x1!r}" y1="{h - y1!r}" x2="{x2!r}" y2="{h - y2!r}"/>')
+    w = float(v[:, 0].max())
+    head = f'<svg xmlns="http://www.w3.org/2000/svg" width="{w!r}mm" height="{h!r}mm" viewBox="0 0 {w!r} {h!r}">'
+    return "\n".join([head, *rows, "</svg>"])
+
+
+def _triangles_by_position(mesh) -> set[tuple]:
+    v = np.round(mesh.vertices[:, :2] - mesh.vertices[:, :2].min(axis=0), 6)
+    return {tuple(sorted(map(tuple, v[t].tolist()))) for t in mesh.triangles}
+
+
+@pytest.mark.parametrize("path", [EXAMPLES / "single_curve.svg", FIXTURES / "Rotating_Star.svg"], ids=lambda p: p.stem)
+def test_a_curve_drawn_as_lines_gets_the_ruling_mesh_of_the_bezier(path: Path, tmp_path: Path) -> None:
+    """Paper §3.3 on a curve that comes as straight pieces (separate SVG lines, a plain FOLD file): the swaps align
+    the facets with its rulings as they do for the Bézier it was sampled from — the very same mesh. They scored
+    only Bézier pieces before, and such files got the plain constrained Delaunay mesh."""
+    bezier = read_pattern(path)
+    assert bezier.edge_from_curve.any()
+    want = _triangles_by_position(build_mesh(bezier))
+    svg = tmp_path / "lines.svg"
+    svg.write_text(_as_lines_svg(bezier))
+    lines = read_pattern(svg)
+    assert lines.edge_from_curve.sum() == bezier.edge_from_curve.sum()
+    assert _triangles_by_position(build_mesh(lines)) == want
+    v = bezier.vertices - bezier.vertices.min(axis=0)
+    fold = tmp_path / "plain.fold"
+    angles = np.nan_to_num(bezier.fold_angles, nan=0.0)
+    fold.write_text(
+        json.dumps(
+            {
+                "file_spec": 1.1,
+                "vertices_coords": v.tolist(),
+                "edges_vertices": bezier.edges.tolist(),
+                "edges_assignment": bezier.assignments.tolist(),
+                "edges_foldAngle": angles.tolist(),
+            }
+        )
+    )
+    plain = read_pattern(fold)
+    assert plain.edge_from_curve.sum() == bezier.edge_from_curve.sum()
+    assert _triangles_by_position(build_mesh(plain)) == want

@@ -24,8 +24,11 @@ Steps, in order:
 5. **Samples beside junctions.** A curve sample point left a small fraction of a chord from a crossing or T-junction
    on its curve is removed where the curve stays within ``tolerance`` of the new chord (the short piece would force
    sliver triangles; :func:`_drop_samples_beside_junctions`).
-6. **Border pieces.** Straight border edges, now running between the junctions the designer drew, are split into
-   ⌈length / interval⌉ equal pieces (so no sliver is left beside a junction).
+6. **Flattened curves and border pieces.** Chains of segments that follow a curve, drawn with straight pieces only
+   (polylines, separate lines), are marked as curve pieces as a Bézier's are, so the ruling swaps score them
+   (:func:`.polylines.flattened_curves`); a stroke with a Bézier or an arc in it says which of its pieces are
+   straight. Straight border edges (not such a chain), now running between the junctions the designer drew, are
+   split into ⌈length / interval⌉ equal pieces (so no sliver is left beside a junction).
 
 Defaults follow the paper (150 mm sheet: interval 7 mm, tolerance 0.07 mm) and are **scale-aware**: multiplied by
 sheet size / 150 mm, where the sheet size is the largest extent of the border's bounding box (of all curves if
@@ -42,6 +45,7 @@ import numpy as np
 
 from .. import run_to_end
 from .model import CreaseCurve, CreasePattern, CurveSegment, PatternError
+from .polylines import flattened_curves
 
 REFERENCE_SIZE_MM = 150.0
 """Sheet width the paper's parameters were chosen for (§4)."""
@@ -502,6 +506,24 @@ def _subdivide_border(
     same = owner[1:] == owner[:-1]
     new_edges = np.column_stack([chain[:-1][same], chain[1:][same]])
     return np.concatenate([verts, new_pts]), new_edges, attrs[owner[:-1][same]]
+
+
+def with_flattened_curves(pattern: CreasePattern, tolerance: float | None = None) -> CreasePattern:
+    """``pattern`` with the chains of its segments that follow a curve marked as curve pieces
+    (:func:`.polylines.flattened_curves`), for crease patterns read as straight segments (a FOLD file from another
+    tool). ``tolerance`` defaults to the paper's, scaled to the sheet (:func:`default_parameters` of the largest
+    extent of the border, or of every vertex if there is none)."""
+    if tolerance is None:
+        border = pattern.edges[pattern.assignments == "B"]
+        pts = pattern.vertices[np.unique(border)] if len(border) else pattern.vertices
+        size = float(np.max(np.ptp(pts, axis=0))) if len(pts) else 0.0
+        if not (size > 0 and math.isfinite(size)):
+            return pattern
+        tolerance = default_parameters(size)[1]
+    curve = pattern.edge_from_curve | flattened_curves(
+        pattern.vertices, pattern.edges, pattern.assignments, pattern.fold_angles, tolerance
+    )
+    return pattern if np.array_equal(curve, pattern.edge_from_curve) else replace(pattern, edge_from_curve=curve)
 
 
 def subdivide_straight_border(pattern: CreasePattern, interval: float | None = None) -> CreasePattern:
@@ -1268,9 +1290,17 @@ def discretize_steps(
     )
     yield "clipped to the border"
     edges, attrs, _ = _drop_samples_beside_junctions(verts, edges, attrs, pieces, interval, tolerance)  # step 5
+    # curves drawn as polylines are curves too (the ruling swaps score only curve pieces); a stroke with a Bézier or
+    # an arc in it says itself which of its pieces are straight
+    assignment, angle = pieces.assignment[attrs], pieces.fold_angle[attrs]
+    polyline_stroke = np.array([all(seg.is_straight for seg in c.segments) for c in curves], dtype=bool)
+    flattened = flattened_curves(verts, edges, assignment, angle, tolerance) & polyline_stroke[pieces.polyline[attrs]]
+    from_curve = pieces.from_curve[attrs] | flattened
     # step 6: straight border pieces between junctions, split evenly
-    straight_border = (pieces.assignment[attrs] == "B") & ~pieces.from_curve[attrs]
-    verts, edges, attrs = _subdivide_border(verts, edges, attrs, straight_border, interval)
+    verts, edges, kept = _subdivide_border(
+        verts, edges, np.arange(len(edges)), (assignment == "B") & ~from_curve, interval
+    )
+    attrs, from_curve = attrs[kept], from_curve[kept]
 
     # drop stray vertices, renumber
     used = np.unique(edges)
@@ -1282,7 +1312,7 @@ def discretize_steps(
         assignments=pieces.assignment[attrs],
         fold_angles=pieces.fold_angle[attrs],
         edge_polyline=pieces.polyline[attrs],
-        edge_from_curve=pieces.from_curve[attrs],
+        edge_from_curve=from_curve,
         sources=sources,
         warnings=warnings,
     )

@@ -2,10 +2,13 @@
 
 A FOLD file (or a discretised pattern) holds straight segments only; chaining them gives back the polylines a
 designer drew — one editable curve per chain of one assignment and angle instead of hundreds of segments — for the
-Import operator, the crease-curve display of a folded mesh and the SVG export.
+Import operator, the crease-curve display of a folded mesh and the SVG export — and tells which chains are curves
+drawn as polylines (:func:`flattened_curves`), so the ruling swaps treat them as the curves they are.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -47,6 +50,86 @@ def chain_edges(edges: np.ndarray) -> list[np.ndarray]:
         if not used[k]:
             chains.append(walk(int(edges[k][0]), k))
     return chains
+
+
+MAX_CURVE_TURN_DEG = 30.0
+"""The sharpest turn between two pieces of one flattened curve (degrees): a sharper one is a corner of the drawing.
+
+A curve sampled at the paper's interval turns a few degrees per piece (a circle of 20 pieces: 18°); a polygon's
+corners (a hexagon's 60°, a square's 90°) and a crease's kinks are drawn corners."""
+
+
+def flattened_curves(
+    vertices: np.ndarray, edges: np.ndarray, assignments: np.ndarray, fold_angles: np.ndarray, tolerance: float
+) -> np.ndarray:
+    """Which segments are pieces of a curve drawn as a polyline (bool per edge).
+
+    Paper §3.3 scores an edge by how well it bisects the *curve* at its ends, so the ruling swaps need to know which
+    segments discretise a curve. A Bézier says so itself; a polyline does not: Origami Simulator's ``<line>``
+    elements, a tool that flattens curves on export, a FOLD file, our own SVG export read back. Read as straight
+    creases, they got the plain constrained Delaunay mesh: on the designer's curved Resch grid read back from our
+    SVG export the fold's mean warp was 16.3° instead of 13.1°.
+
+    A *chain* runs through the vertices where exactly two segments meet, both of one assignment and fold angle (not
+    facet lines, ``F``), turning by at most :data:`MAX_CURVE_TURN_DEG`. A chain is a flattened curve when it closes
+    on itself or when one of its vertices is farther than ``tolerance`` (the discretisation's, mm) from the straight
+    line between its ends: a straight crease cut into pieces stays straight (so do the pieces of a straight border
+    split at the interval), a curve sampled within that tolerance would have been a single chord."""
+    v = np.asarray(vertices, dtype=float)
+    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    m, n = len(e), len(v)
+    out = np.zeros(m, dtype=bool)
+    if m == 0:
+        return out
+    deg = np.bincount(e.ravel(), minlength=n)
+    ends = e.ravel()
+    order = np.argsort(ends, kind="stable")
+    first = np.searchsorted(ends[order], np.arange(n))
+    mid = np.flatnonzero(deg == 2)
+    k1, k2 = order[first[mid]] // 2, order[first[mid] + 1] // 2
+    o1, o2 = e[k1].sum(axis=1) - mid, e[k2].sum(axis=1) - mid
+    u, w = v[mid] - v[o1], v[o2] - v[mid]
+    norms = np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)
+    cos_turn = np.einsum("ij,ij->i", u, w) / np.where(norms > 0, norms, 1.0)
+    role = np.asarray(assignments)
+    angle = np.round(np.nan_to_num(np.asarray(fold_angles, dtype=float), nan=np.inf), 9)
+    joint = (
+        (role[k1] == role[k2])
+        & (role[k1] != "F")
+        & (angle[k1] == angle[k2])
+        & (norms > 0)
+        & (cos_turn >= math.cos(math.radians(MAX_CURVE_TURN_DEG)))
+    )
+    mid, k1, k2 = mid[joint], k1[joint], k2[joint]
+    if len(mid) == 0:
+        return out
+    parent = list(range(m))  # union-find of the segments joined at a chain's vertices
+
+    def root(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for a, b in zip(k1.tolist(), k2.tolist(), strict=True):
+        ra, rb = root(a), root(b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+    chained = np.unique(np.concatenate([k1, k2]))
+    label = np.array([root(k) for k in chained.tolist()], dtype=np.int64)
+    is_joint = np.zeros(n, dtype=bool)
+    is_joint[mid] = True
+    for chain in np.split(chained[np.argsort(label, kind="stable")], np.flatnonzero(np.diff(np.sort(label))) + 1):
+        nodes = np.unique(e[chain])
+        tips = nodes[~is_joint[nodes]]
+        if len(tips) == 0:  # a closed loop
+            out[chain] = True
+            continue
+        a, b = v[tips[0]], v[tips[-1]]
+        ab = b - a
+        t = np.clip((v[nodes] - a) @ ab / max(float(ab @ ab), 1e-300), 0.0, 1.0)
+        out[chain] = float(np.max(np.linalg.norm(v[nodes] - (a + t[:, None] * ab), axis=1))) > tolerance
+    return out
 
 
 def curves_from_pattern(pattern: CreasePattern) -> list[CreaseCurve]:

@@ -255,7 +255,7 @@ def test_export_svg_origami_simulator_convention(tmp_path):
     assert strokes == ["#000000", "#0000ff", "#ff0000"]  # one closed border chain, one valley, one mountain
     valley = next(ln for ln in lines if "#0000ff" in ln)
     mountain = next(ln for ln in lines if "#ff0000" in ln)
-    assert 'opacity="0.5"' in valley and 'opacity="0.333333"' in mountain
+    assert 'opacity="0.5"' in valley and 'opacity="0.3333333333333333"' in mountain  # read back: 60° exactly
     # y flipped back to SVG's y-down: the mountain row (y = 20 mm) stays at 20; the valley spans y 0..40.
     assert 'points="0,20 25,20 50,20"' in mountain or 'points="50,20 25,20 0,20"' in mountain
 

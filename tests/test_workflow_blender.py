@@ -99,7 +99,8 @@ def test_fold_operator_figures_equal_the_command_line(extension, clean_scene, pa
 @pytest.mark.parametrize("name", ["cannot_fold", "curved_pleats", "huffmanTower"])
 def test_fold_file_import_folds_like_the_command_line(extension, clean_scene, tmp_path, name):
     """A FOLD file is folded as it is by the command line (no re-discretisation, its curve flags kept); its unedited
-    import folds to the same mesh and figures. An edited one is discretised from the curves as drawn."""
+    import folds to the same mesh and figures. An edited one is discretised from the curves as drawn, its polylines
+    read as curves again (``flattened_curves``)."""
     reader = ext_module(extension, "core.io.reader")
     fold_io = ext_module(extension, "core.io.fold")
     pipeline = ext_module(extension, "core.pipeline")
@@ -123,7 +124,10 @@ def test_fold_file_import_folds_like_the_command_line(extension, clean_scene, tm
     points = spline.points if spline.type == "POLY" else spline.bezier_points
     points[0].co.x += 1e-4
     edited = folding.pattern_from_objects(objects)
-    assert not edited.edge_from_curve.any() and theirs.edge_from_curve.any() == (name != "huffmanTower")
+    moved = edited.vertices.shape != theirs.vertices.shape or not np.array_equal(edited.vertices, theirs.vertices)
+    assert moved
+    # its polylines still read as the curves they are (flattened curves), the straight pattern's as straight
+    assert edited.edge_from_curve.any() == theirs.edge_from_curve.any() == (name != "huffmanTower")
 
 
 def test_arcs_stay_arcs_lines_stay_lines_and_edits_win(extension, clean_scene):

@@ -551,3 +551,17 @@ def test_flattened_curves_need_one_role_and_angle_and_no_facet_lines() -> None:
     sq = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])
     sq_edges = np.array([(0, 1), (1, 2), (2, 3), (3, 0)])
     assert not flattened_curves(sq, sq_edges, np.array(["B"] * 4), np.full(4, np.nan), 0.07).any()
+
+
+def test_an_outline_drawn_as_one_open_stroke_back_to_its_start_is_read_at_once() -> None:
+    """Its two loose ends coincide: the near-pair grid made each of them 2,048² cells (a second of one Blender job
+    slice, a 4-million-entry array) before its cell was at least twice the merge tolerance."""
+    outline = [(0.0, 0.0), (1000.0, 0.0), (1000.0, 600.0), (0.0, 600.0), (0.0, 0.0)]
+    border = CreaseCurve([line(outline[k], outline[k + 1]) for k in range(4)], "B", None, source="outline")
+    crease = CreaseCurve([line((500.0, 0.0), (500.0, 600.0))], "V", 90.0, source="crease")
+    steps = discretize_steps([border, crease])
+    t0 = time.perf_counter()
+    assert next(steps) == "parameters"
+    assert time.perf_counter() - t0 < 0.25
+    p = discretize([border, crease])
+    assert p.count("V") == 1 and not p.warnings

@@ -291,7 +291,11 @@ def _nearest_within(verts: np.ndarray, pts: np.ndarray, radius: float) -> np.nda
 
 
 def _candidate_pairs(a: np.ndarray, b: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs (i < j) of segments whose tol-expanded bounding boxes overlap, via a uniform grid."""
+    """Pairs (i < j) of segments whose tol-expanded bounding boxes overlap, via a uniform grid.
+
+    The cell is at least twice the median segment and twice ``tol``, so a box spans a few cells: with points
+    (segments of no length) close together, 1/2048 of their extent made every box 2,048² cells, and an outline drawn
+    as one open stroke back to its start spent a second here on its two ends."""
     m = len(a)
     if m < 2:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
@@ -300,7 +304,7 @@ def _candidate_pairs(a: np.ndarray, b: np.ndarray, tol: float) -> tuple[np.ndarr
     origin = lo.min(axis=0)
     lengths = np.hypot(*(b - a).T)
     extent = float(np.max(hi.max(axis=0) - origin))
-    h = max(2.0 * float(np.median(lengths)), extent / 2048.0, 1e-9)
+    h = max(2.0 * float(np.median(lengths)), 2.0 * float(tol), extent / 2048.0, 1e-9)
     while True:
         c0 = np.floor((lo - origin) / h).astype(np.int64)
         c1 = np.floor((hi - origin) / h).astype(np.int64)

@@ -313,15 +313,15 @@ def solve_progress(
 
 def _mesh_steps(pattern_units, angle, mesh_type) -> Generator[jobs.Progress, None, Any]:
     """Discretise (in the units of ``pattern_units``, a :func:`pattern_steps` generator), then triangulate with the
-    ruling swaps (one unit); returns the FoldMesh and its warnings (the pattern's first). Each unit is usually
-    under 100 ms; docs/benchmarks.md lists where it is not."""
-    from ..core.mesh.build import build_mesh
+    ruling swaps (in units, ``build_mesh_steps``); returns the FoldMesh and its warnings (the pattern's first). Each
+    unit is usually under 100 ms; docs/benchmarks.md lists where it is not."""
+    from ..core.mesh.build import build_mesh_steps
     from ..core.pipeline import _with_angle
 
     pattern = yield from as_units(pattern_units, jobs.Progress("discretise"))
     pattern = _with_angle(override_fold_angles(pattern, angle), angle)  # Override applies to every crease
     yield jobs.Progress("mesh")
-    mesh = build_mesh(pattern, mesh_type=engine_id(mesh_type))
+    mesh = yield from as_units(build_mesh_steps(pattern, mesh_type=engine_id(mesh_type)), jobs.Progress("mesh"))
     yield jobs.Progress("model")
     return mesh, list(mesh.warnings)  # build_mesh puts the pattern's warnings first
 

@@ -15,15 +15,16 @@ from __future__ import annotations
 import contextlib
 import gc
 import time
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from dataclasses import replace
 
 import numpy as np
 
+from .. import run_to_end
 from ..pattern.model import CreasePattern
 from .earcut import ear_clip
 from .fold_mesh import FoldMesh
-from .ruling import ruling_swaps
+from .ruling import ruling_swaps_steps
 from .triangulate import (
     _outer_first,
     connected_components,
@@ -75,10 +76,50 @@ def build_mesh(pattern: CreasePattern, mesh_type: str = "ruling", backend: str =
     becomes a mesh edge with its assignment and fold angle (cuts become two border edges); new diagonals are facets
     (``F``, target 0, ``edge_polyline`` −1). ``generation_ms`` is the wall time of triangulation and swaps.
     """
+    return run_to_end(build_mesh_steps(pattern, mesh_type, backend))
+
+
+def build_mesh_steps(
+    pattern: CreasePattern, mesh_type: str = "ruling", backend: str = "auto"
+) -> Generator[str, None, FoldMesh]:
+    """:func:`build_mesh` in units of work (yields each unit's name, returns the mesh): the triangulation, the
+    ruling swaps in units (:func:`.ruling.ruling_swaps_steps`) and the mesh's edges and faces. A Blender job runs
+    one unit per slice; ``generation_ms`` counts the time spent in the units only."""
     if mesh_type not in MESH_TYPES:
         raise ValueError(f"unknown mesh type {mesh_type!r}; expected one of {MESH_TYPES}")
-    with _gc_paused():
-        return _build_mesh(pattern, mesh_type, backend)
+    clock = _WorkClock()
+    return (yield from clock.timed(_build_mesh_steps(pattern, mesh_type, backend, clock)))
+
+
+class _WorkClock:
+    """The time spent inside a generator's units, not in whoever runs them between units (Blender's UI)."""
+
+    def __init__(self) -> None:
+        self.spent = 0.0
+        self._since: float | None = None
+
+    def timed(self, steps: Generator[str, None, FoldMesh]) -> Generator[str, None, FoldMesh]:
+        """Run ``steps`` unit by unit, each with the garbage collector paused (:func:`_gc_paused`), counting the
+        time spent in them."""
+        while True:
+            self._since = time.perf_counter()
+            try:
+                with _gc_paused():
+                    unit = next(steps)
+            except StopIteration as done:
+                return done.value
+            self.spent += time.perf_counter() - self._since
+            self._since = None
+            yield unit
+
+    def restart(self) -> None:
+        """Count from now, the running unit's earlier part left out."""
+        self.spent, self._since = 0.0, time.perf_counter()
+
+    def ms(self) -> float:
+        """Milliseconds spent so far, the running unit included."""
+        running = time.perf_counter() - self._since if self._since is not None else 0.0
+        return (self.spent + running) * 1000.0
 
 
 def _load_blender_modules(mesh_type: str, backend: str) -> None:
@@ -111,9 +152,11 @@ def _warn_separate_pieces(verts: np.ndarray, tris: np.ndarray, warnings: list[st
     )
 
 
-def _build_mesh(pattern: CreasePattern, mesh_type: str, backend: str) -> FoldMesh:
+def _build_mesh_steps(
+    pattern: CreasePattern, mesh_type: str, backend: str, clock: _WorkClock
+) -> Generator[str, None, FoldMesh]:
     _load_blender_modules(mesh_type, backend)
-    t0 = time.perf_counter()
+    clock.restart()  # generation starts after Blender's modules are loaded
     pt = constrained_triangulation(pattern, backend)
     if len(pt.outline_edges):  # no border drawn: the outer boundary of the drawn segments is the border
         assignments = pattern.assignments.copy()
@@ -141,15 +184,17 @@ def _build_mesh(pattern: CreasePattern, mesh_type: str, backend: str) -> FoldMes
             faces_of.append(np.full(len(tri_f), f, dtype=np.int64))
         tris, tface = np.concatenate(parts), np.concatenate(faces_of)
     elif mesh_type == "ruling":
-        res = ruling_swaps(pts, tris, tface, seg_pairs, pattern.edge_from_curve[seg_index])
+        yield "triangulated"
+        res = yield from ruling_swaps_steps(pts, tris, tface, seg_pairs, pattern.edge_from_curve[seg_index])
         tris, tface, swaps = res.triangles, res.triangle_face, res.swaps
 
     cut_pairs = {
         tuple(p) for p, k in zip(seg_pairs.tolist(), seg_index.tolist(), strict=True) if pattern.assignments[k] == "C"
     }
     verts, tris, origin = split_cuts(pts, tris, cut_pairs)
-    generation_ms = (time.perf_counter() - t0) * 1000.0
+    generation_ms = clock.ms()
     _warn_separate_pieces(verts, tris, warnings)
+    yield "cuts split"
 
     # edges: every triangle side once, i < j
     sides = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])

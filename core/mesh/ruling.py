@@ -41,10 +41,13 @@ from __future__ import annotations
 import bisect
 import heapq
 import math
+from collections.abc import Generator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from .. import run_to_end
 from .squash import SQUASH_STRAIN, squash_flips
 from .triangulate import _orient2, orient
 
@@ -440,7 +443,17 @@ class _SwapLoop:
                     self.push(r[0], r[1], e, self.instance(e))
 
 
-def _decide_swaps(
+SWAP_UNIT_POPS = 600
+"""Queue entries the swap loop takes per unit of work (:func:`ruling_swaps_steps`): ~20–40 ms on this machine.
+
+A Blender job runs one unit per slice. As one unit, the swaps of a curve drawn as a 1 mm polyline (Carved_Cylinder,
+3,314 faces, 1,446 swaps) took 0.5–0.7 s: Blender froze for that long."""
+
+SWAP_UNIT_LEVELS = 400
+"""Swaps applied to the ``bmesh`` per unit of work (whole levels of independent rotations)."""
+
+
+def _decide_swaps_steps(
     vertices: np.ndarray,
     triangles: np.ndarray,
     triangle_face: np.ndarray,
@@ -448,20 +461,26 @@ def _decide_swaps(
     scorer: EndpointScorer,
     max_valence: int,
     max_swaps: int | None,
-) -> tuple[list[tuple[int, ...]], list[list[int]], dict[str, int]]:
-    """Run the greedy swap loop on a half-edge structure; return the swaps ``(a, c, b, d, t1, t2, f)`` in order (edge
-    ac becomes bd; t1, t2 the two triangle slots of the quad, f its crease-pattern face), the final triangles (CCW,
-    same slots as the input) and loop statistics.
+) -> Generator[str, None, tuple[list[tuple[int, ...]], list[list[int]], dict[str, int]]]:
+    """Run the greedy swap loop on a half-edge structure, in units of :data:`SWAP_UNIT_POPS` queue entries (yields
+    the unit's name); return the swaps ``(a, c, b, d, t1, t2, f)`` in order (edge ac becomes bd; t1, t2 the two
+    triangle slots of the quad, f its crease-pattern face), the final triangles (CCW, same slots as the input) and
+    loop statistics.
 
     Steps: evaluate every facet edge at once and queue the candidates by new cost; pop the cheapest, skip it if its
     edge was flipped away, re-queue it if its value changed, otherwise swap and re-evaluate the edges around.
     """
     loop = _SwapLoop(vertices, triangles, triangle_face, segments, scorer, max_valence)
     loop.queue_initial()
+    yield "swap candidates scored"
     n, heap = loop.n, loop.heap
     swaps: list[tuple[int, ...]] = []
     cap = max_swaps if max_swaps is not None else 100 * max(1, loop.n_edges)
+    pops = 0
     while heap and len(swaps) < cap:
+        pops += 1
+        if pops % SWAP_UNIT_POPS == 0:
+            yield "ruling swaps"
         cost_q, key, old, _n, eid = heapq.heappop(heap)
         if loop.edge_id.get(old) != eid:  # the edge this entry was queued for has been flipped away
             continue
@@ -486,7 +505,13 @@ def _lookup(codes: np.ndarray, counts: np.ndarray, query: np.ndarray) -> np.ndar
     return np.where(codes[pos] == query, counts[pos], 0)
 
 
-def ruling_swaps(
+def ruling_swaps(*args: Any, **kwargs: Any) -> SwapResult:
+    """Greedy ruling-aware swaps on a CCW triangulation, then the squash flips, in one go: :func:`ruling_swaps_steps`
+    (same arguments) run to its end."""
+    return run_to_end(ruling_swaps_steps(*args, **kwargs))
+
+
+def ruling_swaps_steps(
     vertices: np.ndarray,
     triangles: np.ndarray,
     triangle_face: np.ndarray,
@@ -496,16 +521,17 @@ def ruling_swaps(
     max_valence: int = 3,
     max_swaps: int | None = None,
     squash_strain: float | None = None,
-) -> SwapResult:
-    """Greedy ruling-aware swaps on a CCW triangulation, then the squash flips; pattern ``segments`` (vertex pairs)
-    are never swapped.
+) -> Generator[str, None, SwapResult]:
+    """Greedy ruling-aware swaps on a CCW triangulation, then the squash flips, in units of work (yields each unit's
+    name; returns the :class:`SwapResult`); pattern ``segments`` (vertex pairs) are never swapped.
 
     ``max_valence``: a new endpoint may have at most this many facet edges in the face before the swap (paper: 3).
     ``max_swaps`` caps the ruling loop (default: no practical cap; the loop terminates on its own).
     ``squash_strain``: the threshold of :func:`.squash.squash_flips` (default :data:`.squash.SQUASH_STRAIN`, read
     at the call; 0 turns them off). The swaps are decided on arrays (see the module docstring) and all applied with
-    ``bmesh.ops.rotate_edges``.
-    """
+    ``bmesh.ops.rotate_edges``. The units: the candidates scored, the swap loop in units of :data:`SWAP_UNIT_POPS`
+    queue entries, the squash flips, the ``bmesh`` built and the rotations in units of about
+    :data:`SWAP_UNIT_LEVELS` swaps. A Blender job runs one unit per slice; :func:`ruling_swaps` runs them all."""
     vertices = np.asarray(vertices, dtype=float)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     triangle_face = np.asarray(triangle_face, dtype=np.int64)
@@ -513,7 +539,7 @@ def ruling_swaps(
     curve = np.asarray(segment_is_curve, dtype=bool)
     if curve.any():
         scorer = EndpointScorer(vertices, segments, curve)
-        swaps, decided, stats = _decide_swaps(
+        swaps, decided, stats = yield from _decide_swaps_steps(
             vertices, triangles, triangle_face, segments, scorer, max_valence, max_swaps
         )
     else:  # without curve segments no endpoint scores, every cost is ∞ and no swap can lower it
@@ -525,17 +551,21 @@ def ruling_swaps(
     counts = (stats["convex"], stats["valence"], stats["sliver"], len(flips))
     if not swaps:
         return SwapResult(triangles.copy(), triangle_face.copy(), 0, *counts)
-
-    bm_tris = _apply_with_bmesh(vertices, triangles, swaps)
+    yield "squash flips"
+    bm_tris = yield from _apply_with_bmesh_steps(vertices, triangles, swaps)
     tris = np.asarray(decided, dtype=np.int64).reshape(-1, 3)
     if not np.array_equal(_canonical(bm_tris), _canonical(tris)):  # pragma: no cover
         raise RuntimeError("ruling swaps: the BMesh after rotation differs from the decided triangulation")
     return SwapResult(tris, triangle_face.copy(), len(swaps), *counts)
 
 
-def _apply_with_bmesh(vertices: np.ndarray, triangles: np.ndarray, swaps: list[tuple[int, ...]]) -> np.ndarray:
+def _apply_with_bmesh_steps(
+    vertices: np.ndarray, triangles: np.ndarray, swaps: list[tuple[int, ...]]
+) -> Generator[str, None, np.ndarray]:
     """Apply the decided swaps to a ``bmesh`` of the input triangles with ``bmesh.ops.rotate_edges`` (one call per
-    level of independent swaps) and return the BMesh's triangles, for the check against the decided ones."""
+    level of independent swaps) and return the BMesh's triangles, for the check against the decided ones; yields
+    after building the ``bmesh`` and after every :data:`SWAP_UNIT_LEVELS` swaps or so (whole levels). Closing the
+    generator between units frees the ``bmesh``."""
     # isort: off
     import bpy  # noqa: F401  (bmesh needs bpy imported first in the bpy module)
     import bmesh
@@ -548,7 +578,13 @@ def _apply_with_bmesh(vertices: np.ndarray, triangles: np.ndarray, swaps: list[t
         bm.verts.index_update()
         for tri in triangles.tolist():
             bm.faces.new([verts[i] for i in tri])
+        yield "bmesh built"
+        rotated = 0
         for batch in _independent_runs(swaps):  # levels of disjoint rotations, in dependency order
+            if rotated >= SWAP_UNIT_LEVELS:
+                yield "swaps applied"
+                rotated = 0
+            rotated += len(batch)
             edges = []
             for a, c, *_ in batch:
                 e = bm.edges.get((verts[a], verts[c]))

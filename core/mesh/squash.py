@@ -84,7 +84,7 @@ def squash_flips(
     pattern segments as codes ``min·n + max`` (never flipped). A flip must at least double (:data:`SQUASH_GAIN`)
     the smaller squash strain of its pair, so the loop ends. Returns the flips as ``(a, c, b, d, t1, t2, f)`` —
     edge ac became bd, t1 = (a, c, b) became (a, d, b) and t2 = (c, a, d) became (d, c, b), f their crease-pattern
-    face — the records :func:`..ruling._apply_with_bmesh` applies.
+    face — the records :func:`..ruling._apply_with_bmesh_steps` applies.
     """
     n = len(vertices)
     if not tris:

@@ -565,3 +565,29 @@ def test_an_outline_drawn_as_one_open_stroke_back_to_its_start_is_read_at_once()
     assert time.perf_counter() - t0 < 0.25
     p = discretize([border, crease])
     assert p.count("V") == 1 and not p.warnings
+
+
+def test_a_flattened_curve_border_is_still_split_at_the_interval_and_a_12_gon_is_a_curve() -> None:
+    """A border read as a flattened curve keeps the border's split at the interval (the rulings need border
+    vertices to end at): a circle drawn as a 24-gon of 26 mm chords had them whole once it was read as a curve.
+    A circle of 12 pieces turns exactly 30° at each vertex, and the digits it is written with decided which
+    vertices counted (8 of 12 pieces); now all do."""
+    t = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
+    ring = np.column_stack([100.0 + 100.0 * np.cos(t), 100.0 + 100.0 * np.sin(t)])
+    t12 = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False) + 0.1
+    circle = np.column_stack([100.0 + 40.0 * np.cos(t12), 100.0 + 40.0 * np.sin(t12)])
+    head = '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="0 0 200 200">\n'
+    body = (
+        f'<polygon stroke="#000000" fill="none" points="{_points_attr(ring)}"/>\n'
+        f'<polygon stroke="#0000ff" opacity="0.5" fill="none" points="'
+        + " ".join(f"{x:.6f},{100 - y:.6f}" for x, y in circle.tolist())
+        + '"/>\n'
+    )
+    p = discretize(parse_svg_text(head + body + "</svg>").curves)
+    interval = default_parameters(200.0)[0]
+    a, b = p.vertices[p.edges[:, 0]], p.vertices[p.edges[:, 1]]
+    border = p.assignments == "B"
+    assert np.hypot(*(b - a)[border].T).max() <= interval * (1 + 1e-9)
+    assert border.sum() == 24 * math.ceil(2 * 100 * math.sin(math.pi / 24) / interval)
+    assert p.edge_from_curve[border].all()
+    assert p.count("V") == 12 and p.edge_from_curve[p.assignments == "V"].all()

@@ -27,8 +27,8 @@ Steps, in order:
 6. **Flattened curves and border pieces.** Chains of segments that follow a curve, drawn with straight pieces only
    (polylines, separate lines), are marked as curve pieces as a Bézier's are, so the ruling swaps score them
    (:func:`.polylines.flattened_curves`); a stroke with a Bézier or an arc in it says which of its pieces are
-   straight. Straight border edges (not such a chain), now running between the junctions the designer drew, are
-   split into ⌈length / interval⌉ equal pieces (so no sliver is left beside a junction).
+   straight. Border edges drawn straight (a flattened curve's chords too), now running between the junctions the
+   designer drew, are split into ⌈length / interval⌉ equal pieces (so no sliver is left beside a junction).
 
 Defaults follow the paper (150 mm sheet: interval 7 mm, tolerance 0.07 mm) and are **scale-aware**: multiplied by
 sheet size / 150 mm, where the sheet size is the largest extent of the border's bounding box (of all curves if
@@ -1300,10 +1300,10 @@ def discretize_steps(
     polyline_stroke = np.array([all(seg.is_straight for seg in c.segments) for c in curves], dtype=bool)
     flattened = flattened_curves(verts, edges, assignment, angle, tolerance) & polyline_stroke[pieces.polyline[attrs]]
     from_curve = pieces.from_curve[attrs] | flattened
-    # step 6: straight border pieces between junctions, split evenly
-    verts, edges, kept = _subdivide_border(
-        verts, edges, np.arange(len(edges)), (assignment == "B") & ~from_curve, interval
-    )
+    # step 6: border pieces drawn straight, between junctions, split evenly (a flattened curve's too: its chords can
+    # be far longer than the interval, and the rulings need border vertices to end at)
+    drawn_straight = (assignment == "B") & ~pieces.from_curve[attrs]
+    verts, edges, kept = _subdivide_border(verts, edges, np.arange(len(edges)), drawn_straight, interval)
     attrs, from_curve = attrs[kept], from_curve[kept]
 
     # drop stray vertices, renumber

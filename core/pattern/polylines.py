@@ -55,8 +55,9 @@ def chain_edges(edges: np.ndarray) -> list[np.ndarray]:
 MAX_CURVE_TURN_DEG = 30.0
 """The sharpest turn between two pieces of one flattened curve (degrees): a sharper one is a corner of the drawing.
 
-A curve sampled at the paper's interval turns a few degrees per piece (a circle of 20 pieces: 18°); a polygon's
-corners (a hexagon's 60°, a square's 90°) and a crease's kinks are drawn corners."""
+A curve sampled at the paper's interval turns a few degrees per piece (a circle of 20 pieces: 18°, of 12: 30°,
+counted in whatever the round-off); a polygon's corners (a hexagon's 60°, a square's 90°) and a crease's kinks are
+drawn corners."""
 
 
 def flattened_curves(
@@ -98,7 +99,7 @@ def flattened_curves(
         & (role[k1] != "F")
         & (angle[k1] == angle[k2])
         & (norms > 0)
-        & (cos_turn >= math.cos(math.radians(MAX_CURVE_TURN_DEG)))
+        & (cos_turn >= math.cos(math.radians(MAX_CURVE_TURN_DEG + 1e-3)))  # a 12-gon's 30° in, whatever the digits
     )
     mid, k1, k2 = mid[joint], k1[joint], k2[joint]
     if len(mid) == 0:

@@ -7,8 +7,8 @@ Steps, in order:
    midpoint is inserted wherever its distance from the chord exceeds ``tolerance``, repeatedly, until none is
    left. Each segment is refined on its own, vectorised over its chords.
 2. **Straight segments.** Straight *border* segments are split into ⌈length / interval⌉ equal pieces so the
-   triangulation has border vertices to attach rulings to; straight creases are kept whole. Polyline input is
-   kept vertex for vertex (nearly collinear vertices are never removed: that would destroy flattened curves).
+   triangulation has border vertices to attach rulings to; straight creases are kept whole. Polyline input keeps
+   its drawn vertices, except where it is sampled far finer than the interval (step 6).
 3. **Planar arrangement.** Vertices closer than ``merge_tolerance`` are merged (into the first representative, as
    Origami Simulator does; border vertices come first so the outline never moves); crossing segments (X) and
    endpoints lying on another segment (T) are split at the intersection (a computed crossing within
@@ -27,8 +27,10 @@ Steps, in order:
 6. **Flattened curves and border pieces.** Chains of segments that follow a curve, drawn with straight pieces only
    (polylines, separate lines), are marked as curve pieces as a Bézier's are, so the ruling swaps score them
    (:func:`.polylines.flattened_curves`); a stroke with a Bézier or an arc in it says which of its pieces are
-   straight. Border edges drawn straight (a flattened curve's chords too), now running between the junctions the
-   designer drew, are split into ⌈length / interval⌉ equal pieces (so no sliver is left beside a junction).
+   straight. A polyline sampled far finer than the interval (median piece under a quarter of it) is thinned to the
+   paper's sampling, drawn vertices kept (:func:`.polylines.thin_flattened_curves`). Border edges drawn straight (a
+   flattened curve's chords too), now running between the junctions the designer drew, are split into
+   ⌈length / interval⌉ equal pieces (so no sliver is left beside a junction).
 
 Defaults follow the paper (150 mm sheet: interval 7 mm, tolerance 0.07 mm) and are **scale-aware**: multiplied by
 sheet size / 150 mm, where the sheet size is the largest extent of the border's bounding box (of all curves if
@@ -45,7 +47,7 @@ import numpy as np
 
 from .. import run_to_end
 from .model import CreaseCurve, CreasePattern, CurveSegment, PatternError
-from .polylines import flattened_curves
+from .polylines import flattened_curves, thin_flattened_curves
 
 REFERENCE_SIZE_MM = 150.0
 """Sheet width the paper's parameters were chosen for (§4)."""
@@ -516,7 +518,8 @@ def with_flattened_curves(pattern: CreasePattern, tolerance: float | None = None
     """``pattern`` with the chains of its segments that follow a curve marked as curve pieces
     (:func:`.polylines.flattened_curves`), for crease patterns read as straight segments (a FOLD file from another
     tool). ``tolerance`` defaults to the paper's, scaled to the sheet (:func:`default_parameters` of the largest
-    extent of the border, or of every vertex if there is none)."""
+    extent of the border, or of every vertex if there is none). A FOLD file's segments are kept as they are (not
+    thinned as a drawing's dense polylines are: its edges are named by index)."""
     if tolerance is None:
         border = pattern.edges[pattern.assignments == "B"]
         pts = pattern.vertices[np.unique(border)] if len(border) else pattern.vertices
@@ -1300,6 +1303,14 @@ def discretize_steps(
     polyline_stroke = np.array([all(seg.is_straight for seg in c.segments) for c in curves], dtype=bool)
     flattened = flattened_curves(verts, edges, assignment, angle, tolerance) & polyline_stroke[pieces.polyline[attrs]]
     from_curve = pieces.from_curve[attrs] | flattened
+    # a polyline sampled far finer than the interval is thinned to the paper's sampling (drawn vertices kept)
+    drawn_polyline = polyline_stroke[pieces.polyline[attrs]] & (assignment != "F")
+    kept, chords, source = thin_flattened_curves(verts, edges, assignment, angle, drawn_polyline, interval, tolerance)
+    if len(chords):
+        edges = np.concatenate([edges[kept], chords])
+        attrs = np.concatenate([attrs[kept], attrs[source]])
+        from_curve = np.concatenate([from_curve[kept], from_curve[source]])
+        assignment = pieces.assignment[attrs]
     # step 6: border pieces drawn straight, between junctions, split evenly (a flattened curve's too: its chords can
     # be far longer than the interval, and the rulings need border vertices to end at)
     drawn_straight = (assignment == "B") & ~pieces.from_curve[attrs]

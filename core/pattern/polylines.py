@@ -133,6 +133,117 @@ def flattened_curves(
     return out
 
 
+OVERSAMPLED_FRACTION = 0.25
+"""A flattened curve whose median piece is shorter than this fraction of the interval is thinned
+(:func:`thin_flattened_curves`): the paper's own sampling (chords up to the interval, refined where a chord strays
+beyond the tolerance) has its median piece at half the interval or more, except on curves tighter than the tolerance
+allows, which thinning leaves as they are."""
+
+
+def thin_flattened_curves(
+    vertices: np.ndarray,
+    edges: np.ndarray,
+    assignments: np.ndarray,
+    fold_angles: np.ndarray,
+    curve: np.ndarray,
+    interval: float,
+    tolerance: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Thin the oversampled flattened curves among ``edges`` to the paper's sampling: returns ``(kept, chords,
+    source)``: a bool per edge (False for the pieces replaced), the new chords ``(k, 2)`` and for each the edge whose
+    attributes it takes.
+
+    A curve drawn as a polyline far finer than the interval (a CAD program's 1 mm polyline of a 1 m sheet: 52,326
+    faces and 245 s where its Béziers give 2,348 faces and 2.8 s; 0.05 mm pieces rounded to two decimals, which fold
+    as a zigzag) is walked from each vertex that must stay — a junction, an end, a change of assignment or angle —
+    and each chord is taken as long as it stays within ``interval`` and keeps every skipped vertex within
+    ``tolerance`` of it (paper §3.1), and no other vertex of the pattern lies within ``tolerance`` of it. The kept
+    vertices are drawn ones: nothing moves. Only chains whose median piece is under :data:`OVERSAMPLED_FRACTION` of
+    the interval are thinned, so a pattern sampled as the paper samples (our own SVG export) reads back unchanged.
+    """
+    v = np.asarray(vertices, dtype=float)
+    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    m, n = len(e), len(v)
+    kept = np.ones(m, dtype=bool)
+    none = (kept, np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64))
+    if m == 0 or not np.any(curve) or not (interval > 0 and tolerance > 0):
+        return none
+    deg = np.bincount(e.ravel(), minlength=n)
+    angle = np.round(np.nan_to_num(np.asarray(fold_angles, dtype=float), nan=np.inf), 9)
+    role = np.asarray(assignments)
+    index = {(int(a), int(b)): k for k, (a, b) in enumerate(e.tolist())}
+    index.update({(b, a): k for (a, b), k in list(index.items())})
+    cell = max(interval, tolerance)
+    grid: dict[tuple[int, int], list[int]] = {}
+    for i, (x, y) in enumerate(v.tolist()):
+        grid.setdefault((int(x // cell), int(y // cell)), []).append(i)
+
+    def clear(a: int, b: int, inside: set[int]) -> bool:
+        """No vertex but those of the chain within ``tolerance`` of the chord a–b."""
+        lo, hi = np.minimum(v[a], v[b]) - tolerance, np.maximum(v[a], v[b]) + tolerance
+        near = [
+            i
+            for cx in range(int(lo[0] // cell), int(hi[0] // cell) + 1)
+            for cy in range(int(lo[1] // cell), int(hi[1] // cell) + 1)
+            for i in grid.get((cx, cy), ())
+            if i not in inside
+        ]
+        if not near:
+            return True
+        pts = v[near]
+        d = _distance_to_segment(pts, v[a], v[b])
+        return bool(np.all(d > tolerance))
+
+    chords: list[tuple[int, int]] = []
+    source: list[int] = []
+    for chain in chain_edges(e[curve]):
+        pieces = np.array([index[(int(a), int(b))] for a, b in zip(chain[:-1], chain[1:], strict=True)])
+        lengths = np.hypot(*(v[chain[1:]] - v[chain[:-1]]).T)
+        if np.median(lengths) >= OVERSAMPLED_FRACTION * interval:
+            continue
+        # vertices that stay: the chain's ends, junctions, a change of assignment or fold angle
+        fixed = np.zeros(len(chain), dtype=bool)
+        fixed[[0, -1]] = True
+        inner = np.arange(1, len(chain) - 1)
+        fixed[inner] = (
+            (deg[chain[inner]] != 2)
+            | (role[pieces[inner - 1]] != role[pieces[inner]])
+            | (angle[pieces[inner - 1]] != angle[pieces[inner]])
+        )
+        stops = np.flatnonzero(fixed)
+        own = set(chain.tolist())  # the chain's own vertices are no obstacle: they are what the chord replaces
+        for s0, s1 in zip(stops[:-1], stops[1:], strict=True):
+            i = int(s0)
+            while i < s1:
+                best = i + 1
+                for j in range(i + 2, int(s1) + 1):
+                    a, b = int(chain[i]), int(chain[j])
+                    if np.hypot(*(v[b] - v[a])) > interval:
+                        break
+                    skipped = chain[i + 1 : j]
+                    if np.max(_distance_to_segment(v[skipped], v[a], v[b])) > tolerance:
+                        break
+                    if not clear(a, b, own):
+                        break
+                    best = j
+                if best > i + 1:
+                    kept[pieces[i:best]] = False
+                    chords.append((int(chain[i]), int(chain[best])))
+                    source.append(int(pieces[i]))
+                i = best
+    if not chords:
+        return none
+    return kept, np.array(chords, dtype=np.int64), np.array(source, dtype=np.int64)
+
+
+def _distance_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distances of the points ``p`` ``(k, 2)`` from the segment ``a``–``b``."""
+    ab = b - a
+    ll = float(ab @ ab)
+    t = np.clip((p - a) @ ab / ll, 0.0, 1.0) if ll > 0 else np.zeros(len(p))
+    return np.hypot(*(p - (a + t[:, None] * ab)).T)
+
+
 def curves_from_pattern(pattern: CreasePattern) -> list[CreaseCurve]:
     """Chain the straight segments of a discretised pattern into polyline :class:`CreaseCurve` s.
 

@@ -215,17 +215,9 @@ def thin_flattened_curves(
         for s0, s1 in zip(stops[:-1], stops[1:], strict=True):
             i = int(s0)
             while i < s1:
-                best = i + 1
-                for j in range(i + 2, int(s1) + 1):
-                    a, b = int(chain[i]), int(chain[j])
-                    if np.hypot(*(v[b] - v[a])) > interval:
-                        break
-                    skipped = chain[i + 1 : j]
-                    if np.max(_distance_to_segment(v[skipped], v[a], v[b])) > tolerance:
-                        break
-                    if not clear(a, b, own):
-                        break
-                    best = j
+                best = i + _reach(v[chain[i : int(s1) + 1]], interval, tolerance)
+                while best > i + 1 and not clear(int(chain[i]), int(chain[best]), own):
+                    best -= 1
                 if best > i + 1:
                     kept[pieces[i:best]] = False
                     chords.append((int(chain[i]), int(chain[best])))
@@ -234,6 +226,26 @@ def thin_flattened_curves(
     if not chords:
         return none
     return kept, np.array(chords, dtype=np.int64), np.array(source, dtype=np.int64)
+
+
+def _reach(points: np.ndarray, interval: float, tolerance: float) -> int:
+    """How many pieces of the polyline ``points`` (from its first point) one chord can replace: the largest ``j``
+    whose chord ``points[0]``–``points[j]``, and every shorter one, is within ``interval`` and keeps the points it
+    skips within ``tolerance`` (at least 1). All candidate chords at once: one array of their distances."""
+    a = points[0]
+    reach = np.hypot(*(points[1:] - a).T) <= interval
+    reach[0] = True
+    count = int(np.argmin(reach)) if not reach.all() else len(reach)  # chords 1..count are short enough
+    if count < 2:
+        return 1
+    ends, inner = points[1 : count + 1], points[1:count]  # chord ends j = 1..count, the points they may skip
+    ab = ends - a
+    ll = np.einsum("ij,ij->i", ab, ab)  # 0 for a chord back to the start of a closed loop
+    t = np.clip((inner - a) @ ab.T / np.where(ll > 0, ll, 1.0), 0.0, 1.0)  # (inner, chords)
+    gap = np.hypot(inner[:, None, 0] - (a[0] + t * ab[None, :, 0]), inner[:, None, 1] - (a[1] + t * ab[None, :, 1]))
+    skipped = np.arange(count - 1)[:, None] < np.arange(count)[None, :]  # chord j skips points 1..j-1
+    ok = np.where(skipped, gap, 0.0).max(axis=0) <= tolerance
+    return int(np.argmin(ok)) if not ok.all() else count
 
 
 def _distance_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -595,3 +595,30 @@ def test_a_flattened_curve_border_is_still_split_at_the_interval_and_a_12_gon_is
     assert border.sum() == 24 * math.ceil(2 * 100 * math.sin(math.pi / 24) / interval)
     assert p.edge_from_curve[border].all()
     assert p.count("V") == 12 and p.edge_from_curve[p.assignments == "V"].all()
+
+
+def test_inside_border_in_bands_counts_as_every_point_against_every_segment() -> None:
+    """``_inside_border`` takes the points in horizontal bands against the border segments that meet each band (0.5 s
+    → a few ms for 27,800 pieces inside a border of 3,224): the same answer as the plain even-odd count, on random
+    star polygons, with points on their vertices and on rounded coordinates."""
+    from curved_fold.core.pattern.discretize import _inside_border
+
+    def every_pair(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        ay, by, ax, bx = a[:, 1], b[:, 1], a[:, 0], b[:, 0]
+        px, py = points[:, 0:1], points[:, 1:2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = ax + (py - ay) * (bx - ax) / (by - ay)
+        return (np.count_nonzero(((ay > py) != (by > py)) & (px < xc), axis=1) % 2) == 1
+
+    rng = np.random.default_rng(20261126)
+    for trial in range(40):
+        n = int(rng.integers(3, 400))
+        t = np.sort(rng.uniform(0.0, 2.0 * np.pi, n))
+        r = rng.uniform(0.5, 1.5, n)
+        poly = np.column_stack([r * np.cos(t), r * np.sin(t)])
+        if trial % 4 == 0:
+            poly = np.round(poly, 1)
+        pts = rng.uniform(-2.0, 2.0, (int(rng.integers(1, 3000)), 2))
+        pts[: min(50, len(pts))] = poly[rng.integers(0, n, min(50, len(pts)))]
+        a, b = poly, np.roll(poly, -1, axis=0)
+        np.testing.assert_array_equal(_inside_border(pts, a, b), every_pair(pts, a, b), err_msg=str(trial))

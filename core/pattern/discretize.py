@@ -634,18 +634,37 @@ def _drop_samples_beside_junctions(
 
 
 def _inside_border(points: np.ndarray, border_a: np.ndarray, border_b: np.ndarray) -> np.ndarray:
-    """Even-odd test of points against the closed border polygon(s) given as segments (chunked, vectorised)."""
+    """Even-odd test of points against the closed border polygon(s) given as segments (vectorised).
+
+    The points are taken in horizontal bands, each against the border segments whose y-range meets the band (only
+    those can straddle a point's height): the same counts as every point against every segment, which took 0.5 s
+    for 27,800 crease pieces inside a border of 3,224 (a 1 m sheet drawn as 1 mm polylines)."""
     out = np.zeros(len(points), dtype=bool)
-    chunk = max(1, 2_000_000 // max(len(border_a), 1))
+    if len(points) == 0 or len(border_a) == 0:
+        return out
     ay, by = border_a[:, 1], border_b[:, 1]
     ax, bx = border_a[:, 0], border_b[:, 0]
-    for s in range(0, len(points), chunk):
-        px = points[s : s + chunk, 0:1]
-        py = points[s : s + chunk, 1:2]
-        straddle = (ay > py) != (by > py)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            xc = ax + (py - ay) * (bx - ax) / (by - ay)
-        out[s : s + chunk] = (np.count_nonzero(straddle & (px < xc), axis=1) % 2) == 1
+    ylo, yhi = np.minimum(ay, by), np.maximum(ay, by)
+    py_all = points[:, 1]
+    bands = max(1, min(256, int(np.sqrt(len(border_a)))))
+    cuts = np.quantile(py_all, np.linspace(0.0, 1.0, bands + 1))
+    band = np.clip(np.searchsorted(cuts, py_all, side="right") - 1, 0, bands - 1)
+    for k in range(bands):
+        idx = np.flatnonzero(band == k)
+        if len(idx) == 0:
+            continue
+        lo, hi = float(py_all[idx].min()), float(py_all[idx].max())
+        seg = np.flatnonzero((yhi > lo) & (ylo <= hi))  # a straddling segment has ylo <= py < yhi
+        if len(seg) == 0:
+            continue
+        chunk = max(1, 2_000_000 // len(seg))
+        for s in range(0, len(idx), chunk):
+            rows = idx[s : s + chunk]
+            px, py = points[rows, 0:1], points[rows, 1:2]
+            straddle = (ay[seg] > py) != (by[seg] > py)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                xc = ax[seg] + (py - ay[seg]) * (bx[seg] - ax[seg]) / (by[seg] - ay[seg])
+            out[rows] = (np.count_nonzero(straddle & (px < xc), axis=1) % 2) == 1
     return out
 
 

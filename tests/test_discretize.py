@@ -464,7 +464,7 @@ def test_curve_samples_a_hair_from_a_junction_are_removed_within_tolerance(monke
     gone = np.array([v for v in plain.vertices.round(9).tolist() if tuple(v) not in kept])
     a, b = fixed.vertices[fixed.edges[:, 0]], fixed.vertices[fixed.edges[:, 1]]
     for p in gone:
-        d = disc._point_segment_distance(np.repeat(p[None], len(a), axis=0), a, b).min()
+        d = disc.point_segment_distance(np.repeat(p[None], len(a), axis=0), a, b).min()
         assert d <= tolerance
 
 

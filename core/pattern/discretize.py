@@ -47,7 +47,7 @@ import numpy as np
 
 from .. import run_to_end
 from .model import CreaseCurve, CreasePattern, CurveSegment, PatternError
-from .polylines import flattened_curves, thin_flattened_curves
+from .polylines import flattened_curves, point_segment_distance, segment_foot, thin_flattened_curves
 
 REFERENCE_SIZE_MM = 150.0
 """Sheet width the paper's parameters were chosen for (§4)."""
@@ -143,18 +143,6 @@ def _estimate_pieces(seg: CurveSegment, interval: float, tolerance: float) -> fl
     return max(length / interval, by_tol, 1.0)
 
 
-def _segment_foot(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise, the point of segment ``a → b`` nearest ``p`` (``a`` for a segment of no length)."""
-    ab = b - a
-    ll = np.einsum("ij,ij->i", ab, ab)
-    t = np.where(ll > 0, np.einsum("ij,ij->i", p - a, ab) / np.where(ll > 0, ll, 1.0), 0.0)
-    return a + np.clip(t, 0.0, 1.0)[:, None] * ab
-
-
-def _point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.hypot(*(p - _segment_foot(p, a, b)).T)
-
-
 def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budget: int = MAX_SEGMENTS) -> np.ndarray:
     """Parameters of the polyline vertices of one curved segment (paper §3.1), sorted, starting 0 and ending 1.
 
@@ -176,7 +164,7 @@ def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budge
     for _ in range(64):
         tm = 0.5 * (t[:-1] + t[1:])
         pm = seg.evaluate(tm)
-        dist = _point_segment_distance(pm, p[:-1], p[1:])
+        dist = point_segment_distance(pm, p[:-1], p[1:])
         bad = dist > tolerance
         if not bad.any() or len(t) + int(bad.sum()) > budget + 1:
             break
@@ -200,7 +188,7 @@ def _segment_polyline(
     t = curve_parameters(seg, interval, tolerance, budget)
     pts = seg.evaluate(t)
     pts[0], pts[-1] = start, end  # exact joints with the neighbouring segments
-    worst = float(_point_segment_distance(seg.evaluate(0.5 * (t[:-1] + t[1:])), pts[:-1], pts[1:]).max())
+    worst = float(point_segment_distance(seg.evaluate(0.5 * (t[:-1] + t[1:])), pts[:-1], pts[1:]).max())
     return pts, True, worst
 
 
@@ -613,7 +601,7 @@ def _drop_samples_beside_junctions(
             if not same or w == junction or w in touched:
                 continue
             pa, pb, pw = verts[junction], verts[sample], verts[w]
-            if _point_segment_distance(pb[None], pa[None], pw[None])[0] > tolerance:
+            if point_segment_distance(pb[None], pa[None], pw[None])[0] > tolerance:
                 continue
             if np.any(np.all(np.sort(edges[~drop], axis=1) == sorted((junction, w)), axis=1)):
                 continue  # the chord exists already
@@ -1127,7 +1115,7 @@ def _on_or_inside_closed_border(points: np.ndarray, curves: list[CreaseCurve], t
         a = np.concatenate([s.evaluate(np.linspace(0.0, 1.0, 65)) for s in c.segments])
         b = np.roll(a, -1, axis=0)
         out |= _inside_border(points, a, b)
-        out |= np.array([_point_segment_distance(np.broadcast_to(q, a.shape), a, b).min() <= tol for q in points])
+        out |= np.array([point_segment_distance(np.broadcast_to(q, a.shape), a, b).min() <= tol for q in points])
     return out
 
 
@@ -1216,7 +1204,7 @@ def _snap_short_ends(
     reach = SHORT_OF_BORDER_FRACTION * size
     which, sides = np.nonzero(loose)
     ba, bb = verts[edges[assign == "B", 0]], verts[edges[assign == "B", 1]]
-    gaps = np.array([_point_segment_distance(np.broadcast_to(q, ba.shape), ba, bb).min() for q in verts[edges[loose]]])
+    gaps = np.array([point_segment_distance(np.broadcast_to(q, ba.shape), ba, bb).min() for q in verts[edges[loose]]])
     short = (gaps > 0.0) & (gaps <= reach)
     if not short.any():
         return verts, edges, attrs
@@ -1232,7 +1220,7 @@ def _snap_short_ends(
         border = np.flatnonzero(pieces.assignment[all_a] == "B")
         p = pts[edges[w, side]]
         a, b = pts[all_e[border, 0]], pts[all_e[border, 1]]
-        foot = _segment_foot(np.broadcast_to(p, a.shape), a, b)
+        foot = segment_foot(np.broadcast_to(p, a.shape), a, b)
         dist = np.hypot(*(p - foot).T)
         k = int(np.argmin(dist))
         gap = float(dist[k])
@@ -1320,11 +1308,13 @@ def discretize_steps(
     # an arc in it says itself which of its pieces are straight
     assignment, angle = pieces.assignment[attrs], pieces.fold_angle[attrs]
     polyline_stroke = np.array([all(seg.is_straight for seg in c.segments) for c in curves], dtype=bool)
-    flattened = flattened_curves(verts, edges, assignment, angle, tolerance) & polyline_stroke[pieces.polyline[attrs]]
-    from_curve = pieces.from_curve[attrs] | flattened
+    drawn_polyline = polyline_stroke[pieces.polyline[attrs]]
+    from_curve = pieces.from_curve[attrs] | (
+        flattened_curves(verts, edges, assignment, angle, tolerance) & drawn_polyline
+    )
     # a polyline sampled far finer than the interval is thinned to the paper's sampling (drawn vertices kept)
-    drawn_polyline = polyline_stroke[pieces.polyline[attrs]] & (assignment != "F")
-    kept, chords, source = thin_flattened_curves(verts, edges, assignment, angle, drawn_polyline, interval, tolerance)
+    thin = drawn_polyline & (assignment != "F")
+    kept, chords, source = thin_flattened_curves(verts, edges, assignment, angle, thin, interval, tolerance)
     if len(chords):
         edges = np.concatenate([edges[kept], chords])
         attrs = np.concatenate([attrs[kept], attrs[source]])

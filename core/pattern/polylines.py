@@ -3,7 +3,8 @@
 A FOLD file (or a discretised pattern) holds straight segments only; chaining them gives back the polylines a
 designer drew — one editable curve per chain of one assignment and angle instead of hundreds of segments — for the
 Import operator, the crease-curve display of a folded mesh and the SVG export — and tells which chains are curves
-drawn as polylines (:func:`flattened_curves`), so the ruling swaps treat them as the curves they are.
+drawn as polylines (:func:`flattened_curves`), so the ruling swaps treat them as the curves they are. The distance of
+points from segments (:func:`point_segment_distance`) lives here for those tests and for the discretisation.
 """
 
 from __future__ import annotations
@@ -13,6 +14,26 @@ import math
 import numpy as np
 
 from .model import CreaseCurve, CreasePattern, CurveSegment
+
+
+def segment_foot(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise, the point of segment ``a → b`` nearest ``p`` (``a`` for a segment of no length)."""
+    ab = b - a
+    ll = np.einsum("ij,ij->i", ab, ab)
+    t = np.where(ll > 0, np.einsum("ij,ij->i", p - a, ab) / np.where(ll > 0, ll, 1.0), 0.0)
+    return a + np.clip(t, 0.0, 1.0)[:, None] * ab
+
+
+def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise distance of ``p`` from the segment ``a → b`` (the discretisation's tolerance test, the border gaps,
+    the flattened curves' straightness)."""
+    return np.hypot(*(p - segment_foot(p, a, b)).T)
+
+
+def _angle_key(fold_angles: np.ndarray) -> np.ndarray:
+    """Fold angles as comparable keys: rounded to 1e-9°, a missing angle (``nan``) as ``inf``, so two segments of one
+    drawn angle compare equal."""
+    return np.round(np.nan_to_num(np.asarray(fold_angles, dtype=float), nan=np.inf), 9)
 
 
 def chain_edges(edges: np.ndarray) -> list[np.ndarray]:
@@ -93,7 +114,7 @@ def flattened_curves(
     norms = np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)
     cos_turn = np.einsum("ij,ij->i", u, w) / np.where(norms > 0, norms, 1.0)
     role = np.asarray(assignments)
-    angle = np.round(np.nan_to_num(np.asarray(fold_angles, dtype=float), nan=np.inf), 9)
+    angle = _angle_key(fold_angles)
     joint = (
         (role[k1] == role[k2])
         & (role[k1] != "F")
@@ -126,10 +147,8 @@ def flattened_curves(
         if len(tips) == 0:  # a closed loop
             out[chain] = True
             continue
-        a, b = v[tips[0]], v[tips[-1]]
-        ab = b - a
-        t = np.clip((v[nodes] - a) @ ab / max(float(ab @ ab), 1e-300), 0.0, 1.0)
-        out[chain] = float(np.max(np.linalg.norm(v[nodes] - (a + t[:, None] * ab), axis=1))) > tolerance
+        a, b = np.broadcast_to(v[tips[0]], v[nodes].shape), np.broadcast_to(v[tips[-1]], v[nodes].shape)
+        out[chain] = float(np.max(point_segment_distance(v[nodes], a, b))) > tolerance
     return out
 
 
@@ -169,7 +188,7 @@ def thin_flattened_curves(
     if m == 0 or not np.any(curve) or not (interval > 0 and tolerance > 0):
         return none
     deg = np.bincount(e.ravel(), minlength=n)
-    angle = np.round(np.nan_to_num(np.asarray(fold_angles, dtype=float), nan=np.inf), 9)
+    angle = _angle_key(fold_angles)
     role = np.asarray(assignments)
     index = {(int(a), int(b)): k for k, (a, b) in enumerate(e.tolist())}
     index.update({(b, a): k for (a, b), k in list(index.items())})
@@ -191,7 +210,7 @@ def thin_flattened_curves(
         if not near:
             return True
         pts = v[near]
-        d = _distance_to_segment(pts, v[a], v[b])
+        d = point_segment_distance(pts, np.broadcast_to(v[a], pts.shape), np.broadcast_to(v[b], pts.shape))
         return bool(np.all(d > tolerance))
 
     chords: list[tuple[int, int]] = []
@@ -248,14 +267,6 @@ def _reach(points: np.ndarray, interval: float, tolerance: float) -> int:
     return int(np.argmin(ok)) if not ok.all() else count
 
 
-def _distance_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distances of the points ``p`` ``(k, 2)`` from the segment ``a``–``b``."""
-    ab = b - a
-    ll = float(ab @ ab)
-    t = np.clip((p - a) @ ab / ll, 0.0, 1.0) if ll > 0 else np.zeros(len(p))
-    return np.hypot(*(p - (a + t[:, None] * ab)).T)
-
-
 def curves_from_pattern(pattern: CreasePattern) -> list[CreaseCurve]:
     """Chain the straight segments of a discretised pattern into polyline :class:`CreaseCurve` s.
 
@@ -263,7 +274,7 @@ def curves_from_pattern(pattern: CreasePattern) -> list[CreaseCurve]:
     within the group, so a FOLD file's discretised curve comes back as one editable curve, not hundreds. A plain
     FOLD file (every edge its own polyline) is grouped by assignment and angle only.
     """
-    angles = np.round(np.nan_to_num(pattern.fold_angles, nan=np.inf), 9)
+    angles = _angle_key(pattern.fold_angles)
     poly_ids = pattern.edge_polyline
     if len(np.unique(poly_ids)) == len(poly_ids):  # plain FOLD: one "polyline" per edge carries no grouping
         poly_ids = np.full(len(poly_ids), -1)

@@ -28,7 +28,7 @@ Steps, in order:
    (polylines, separate lines), are marked as curve pieces as a Bézier's are, so the ruling swaps score them
    (:func:`.polylines.flattened_curves`); a stroke with a Bézier or an arc in it says which of its pieces are
    straight. A polyline sampled far finer than the interval (median piece under a quarter of it) is thinned to the
-   paper's sampling, drawn vertices kept (:func:`.polylines.thin_flattened_curves`). Border edges drawn straight (a
+   paper's sampling, drawn vertices kept (:func:`.polylines.thin_dense_polylines`). Border edges drawn straight (a
    flattened curve's chords too), now running between the junctions the designer drew, are split into
    ⌈length / interval⌉ equal pieces (so no sliver is left beside a junction).
 
@@ -47,7 +47,7 @@ import numpy as np
 
 from .. import run_to_end
 from .model import CreaseCurve, CreasePattern, CurveSegment, PatternError
-from .polylines import flattened_curves, point_segment_distance, segment_foot, thin_flattened_curves
+from .polylines import flattened_curves, point_segment_distance, segment_foot, thin_dense_polylines
 
 REFERENCE_SIZE_MM = 150.0
 """Sheet width the paper's parameters were chosen for (§4)."""
@@ -1314,7 +1314,7 @@ def discretize_steps(
     )
     # a polyline sampled far finer than the interval is thinned to the paper's sampling (drawn vertices kept)
     thin = drawn_polyline & (assignment != "F")
-    kept, chords, source = thin_flattened_curves(verts, edges, assignment, angle, thin, interval, tolerance)
+    kept, chords, source = thin_dense_polylines(verts, edges, assignment, angle, thin, interval, tolerance)
     if len(chords):
         edges = np.concatenate([edges[kept], chords])
         attrs = np.concatenate([attrs[kept], attrs[source]])

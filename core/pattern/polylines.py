@@ -153,39 +153,40 @@ def flattened_curves(
 
 
 OVERSAMPLED_FRACTION = 0.25
-"""A flattened curve whose median piece is shorter than this fraction of the interval is thinned
-(:func:`thin_flattened_curves`): the paper's own sampling (chords up to the interval, refined where a chord strays
+"""A drawn polyline whose median piece is shorter than this fraction of the interval is thinned
+(:func:`thin_dense_polylines`): the paper's own sampling (chords up to the interval, refined where a chord strays
 beyond the tolerance) has its median piece at half the interval or more, except on curves tighter than the tolerance
 allows, which thinning leaves as they are."""
 
 
-def thin_flattened_curves(
+def thin_dense_polylines(
     vertices: np.ndarray,
     edges: np.ndarray,
     assignments: np.ndarray,
     fold_angles: np.ndarray,
-    curve: np.ndarray,
+    drawn: np.ndarray,
     interval: float,
     tolerance: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Thin the oversampled flattened curves among ``edges`` to the paper's sampling: returns ``(kept, chords,
-    source)``: a bool per edge (False for the pieces replaced), the new chords ``(k, 2)`` and for each the edge whose
-    attributes it takes.
+    """Thin the oversampled polylines among the ``edges`` marked in ``drawn`` (drawn as polylines, curved or
+    straight) to the paper's sampling: returns ``(kept, chords, source)``: a bool per edge (False for the pieces
+    replaced), the new chords ``(k, 2)`` and for each the edge whose attributes it takes.
 
-    A curve drawn as a polyline far finer than the interval (a CAD program's 1 mm polyline of a 1 m sheet: 52,326
-    faces and 245 s where its Béziers give 2,348 faces and 2.8 s; 0.05 mm pieces rounded to two decimals, which fold
-    as a zigzag) is walked from each vertex that must stay — a junction, an end, a change of assignment or angle —
-    and each chord is taken as long as it stays within ``interval`` and keeps every skipped vertex within
-    ``tolerance`` of it (paper §3.1), and no other vertex of the pattern lies within ``tolerance`` of it. The kept
-    vertices are drawn ones: nothing moves. Only chains whose median piece is under :data:`OVERSAMPLED_FRACTION` of
-    the interval are thinned, so a pattern sampled as the paper samples (our own SVG export) reads back unchanged.
+    A curve (or a straight line) drawn as a polyline far finer than the interval (a CAD program's 1 mm polyline of a
+    1 m sheet: 52,326 faces and 245 s where its Béziers give 2,348 faces and 2.8 s; 0.05 mm pieces rounded to two
+    decimals, which fold as a zigzag) is walked from each vertex that must stay — a junction, an end, a change of
+    assignment or angle — and each chord is taken as long as it stays within ``interval`` and keeps every skipped
+    vertex within ``tolerance`` of it (paper §3.1), and no other vertex of the pattern lies within ``tolerance`` of
+    it. The kept vertices are drawn ones: nothing moves. Only chains whose median piece is under
+    :data:`OVERSAMPLED_FRACTION` of the interval are thinned, so a pattern sampled as the paper samples (our own SVG
+    export) reads back unchanged.
     """
     v = np.asarray(vertices, dtype=float)
     e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     m, n = len(e), len(v)
     kept = np.ones(m, dtype=bool)
     none = (kept, np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64))
-    if m == 0 or not np.any(curve) or not (interval > 0 and tolerance > 0):
+    if m == 0 or not np.any(drawn) or not (interval > 0 and tolerance > 0):
         return none
     deg = np.bincount(e.ravel(), minlength=n)
     angle = _angle_key(fold_angles)
@@ -215,7 +216,7 @@ def thin_flattened_curves(
 
     chords: list[tuple[int, int]] = []
     source: list[int] = []
-    for chain in chain_edges(e[curve]):
+    for chain in chain_edges(e[drawn]):
         pieces = np.array([index[(int(a), int(b))] for a, b in zip(chain[:-1], chain[1:], strict=True)])
         lengths = np.hypot(*(v[chain[1:]] - v[chain[:-1]]).T)
         if np.median(lengths) >= OVERSAMPLED_FRACTION * interval:

@@ -87,6 +87,7 @@ def build_mesh_steps(
     one unit per slice; ``generation_ms`` counts the time spent in the units only."""
     if mesh_type not in MESH_TYPES:
         raise ValueError(f"unknown mesh type {mesh_type!r}; expected one of {MESH_TYPES}")
+    _load_blender_modules(mesh_type, backend, pattern)  # in the first unit, not counted: it is not generation
     clock = _WorkClock()
     return (yield from clock.timed(_build_mesh_steps(pattern, mesh_type, backend, clock)))
 
@@ -111,10 +112,6 @@ class _WorkClock:
             self.spent += time.perf_counter() - self._since
             self._since = None
             yield unit
-
-    def restart(self) -> None:
-        """Count from now, the running unit's earlier part left out."""
-        self.spent, self._since = 0.0, time.perf_counter()
 
     def ms(self) -> float:
         """Milliseconds spent so far, the running unit included."""
@@ -158,8 +155,6 @@ def _warn_separate_pieces(verts: np.ndarray, tris: np.ndarray, warnings: list[st
 def _build_mesh_steps(
     pattern: CreasePattern, mesh_type: str, backend: str, clock: _WorkClock
 ) -> Generator[str, None, FoldMesh]:
-    _load_blender_modules(mesh_type, backend, pattern)
-    clock.restart()  # generation starts after Blender's modules are loaded
     pt = constrained_triangulation(pattern, backend)
     if len(pt.outline_edges):  # no border drawn: the outer boundary of the drawn segments is the border
         assignments = pattern.assignments.copy()

@@ -502,6 +502,14 @@ def _subdivide_border(
     return np.concatenate([verts, new_pts]), new_edges, attrs[owner[:-1][same]]
 
 
+def _pattern_sheet_size(pattern: CreasePattern) -> float:
+    """The sheet size of a discretised pattern, as :func:`sheet_size` is a drawing's: the largest extent of its
+    border's vertices, or of every vertex if there is no border (0 for none)."""
+    border = pattern.edges[pattern.assignments == "B"]
+    pts = pattern.vertices[np.unique(border)] if len(border) else pattern.vertices
+    return float(np.max(np.ptp(pts, axis=0))) if len(pts) else 0.0
+
+
 def with_flattened_curves(pattern: CreasePattern, tolerance: float | None = None) -> CreasePattern:
     """``pattern`` with the chains of its segments that follow a curve marked as curve pieces
     (:func:`.polylines.flattened_curves`), for crease patterns read as straight segments (a FOLD file from another
@@ -509,9 +517,7 @@ def with_flattened_curves(pattern: CreasePattern, tolerance: float | None = None
     extent of the border, or of every vertex if there is none). A FOLD file's segments are kept as they are (not
     thinned as a drawing's dense polylines are: its edges are named by index)."""
     if tolerance is None:
-        border = pattern.edges[pattern.assignments == "B"]
-        pts = pattern.vertices[np.unique(border)] if len(border) else pattern.vertices
-        size = float(np.max(np.ptp(pts, axis=0))) if len(pts) else 0.0
+        size = _pattern_sheet_size(pattern)
         if not (size > 0 and math.isfinite(size)):
             return pattern
         tolerance = default_parameters(size)[1]
@@ -532,8 +538,7 @@ def subdivide_straight_border(pattern: CreasePattern, interval: float | None = N
     if not straight.any():
         return pattern
     if interval is None:
-        border = pattern.vertices[np.unique(pattern.edges[pattern.assignments == "B"])]
-        interval = default_parameters(float(np.max(np.ptp(border, axis=0))))[0]
+        interval = default_parameters(_pattern_sheet_size(pattern))[0]
     if not (interval > 0 and math.isfinite(interval)):  # a border of one point: nothing to split
         return pattern
     m = len(pattern.edges)

@@ -264,25 +264,30 @@ def test_mesh_in_units_is_the_same_mesh_and_the_swaps_are_sliced() -> None:
 
     pattern = read_pattern(FIXTURES / "Carved_Cylinder.svg", interval=1.0)
     whole = build_mesh(pattern)
-    steps = build_mesh_steps(pattern)
-    names, times = [], []
-    while True:
-        t0 = time.perf_counter()
-        try:
-            names.append(next(steps))
-        except StopIteration as done:
-            mesh = done.value
+    runs = []  # three runs: each unit's time taken as its fastest, so a pause of the shared machine is no unit's
+    for _ in range(3):
+        steps = build_mesh_steps(pattern)
+        names, times = [], []
+        while True:
+            t0 = time.perf_counter()
+            try:
+                names.append(next(steps))
+            except StopIteration as done:
+                mesh = done.value
+                times.append(time.perf_counter() - t0)
+                break
             times.append(time.perf_counter() - t0)
-            break
-        times.append(time.perf_counter() - t0)
-    for key in ("vertices", "triangles", "edges", "assignments", "edge_from_curve", "triangle_face"):
-        np.testing.assert_array_equal(getattr(mesh, key), getattr(whole, key), err_msg=key)
+        for key in ("vertices", "triangles", "edges", "assignments", "edge_from_curve", "triangle_face"):
+            np.testing.assert_array_equal(getattr(mesh, key), getattr(whole, key), err_msg=key)
+        assert 0 < mesh.generation_ms <= 1e3 * sum(times) * 1.05
+        runs.append((names, times))
+    assert all(r[0] == names for r in runs)  # the same units each time
+    times = np.min([r[1] for r in runs], axis=0)
     assert mesh.swaps == whole.swaps > 1000
     assert names[0] == "triangulated" and names[1] == "swap candidates scored"
     assert names.count("ruling swaps") >= mesh.swaps // SWAP_UNIT_POPS  # at least one pop per swap
     assert "bmesh built" in names and names.count("swaps applied") >= 2 and names[-1] == "cuts split"
     assert max(times) < 0.3 * sum(times)
-    assert 0 < mesh.generation_ms <= 1e3 * sum(times) * 1.05
 
 
 def _dense_arc_svg(step: float, decimals: int | None, crossed: bool = True) -> str:

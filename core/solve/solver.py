@@ -202,14 +202,14 @@ class Solver:
     def prepare_steps(self) -> Generator[str, None, HessianAssembler]:
         """Make :attr:`assembler` in units for a Blender job: the nested dissection of the coupling graph one
         component at a time ("ordering": ~95 ms in all at 3,000 faces, ~220 ms on a 4,000-face clef of many
-        strips), then the factorisation's structure ("structure", ~35 ms), then the scatter indices; returns the
-        assembler (at once if it exists)."""
+        strips), then the factorisation's structure ("structure", ~35 ms), then the scatter indices ("scatter",
+        :data:`.newton.SCATTER_UNIT` block pairs per unit); returns the assembler (at once if it exists)."""
         if self._assembler is None:
             pairs = HessianAssembler.coupling_pairs(self.model)
             dissection = yield from as_units(dissect_pairs_steps(self.model.n_nodes, pairs), "ordering")
             matrix = NestedDissection(self.model.n_nodes, pairs, dissection=dissection)
             yield "structure"
-            self._assembler = HessianAssembler(self.model, matrix=matrix)
+            self._assembler = yield from HessianAssembler.steps(self.model, matrix)
         return self._assembler
 
     @property

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..core import as_units
 from ..core.mesh.fold_mesh import FoldMesh
+from ..core.mesh.transfer import carried_shape
 from ..core.pattern.model import PatternError
 from . import bake, jobs, mesh_object, pins, self_intersection, source_state
 from .curves import curve_objects
@@ -510,6 +511,7 @@ def refold_job(
     method = props.solver
     angle = override_angle_degrees(props)
     settings = solver_settings(props, max_iterations=max_iterations)  # the job keeps the settings of its start
+    fresh_settings = solver_settings(props)  # a fold from the flat sheet gets the whole budget, live or not
     mesh_type = props.mesh_type
     parameters = pattern_parameters(props, scene)
     positions_preview = jobs.PositionsPreview(ob, scene)
@@ -524,9 +526,10 @@ def refold_job(
                 mesh, remesh = built, True
                 mesh_preview.set_mesh(mesh)
                 previews.active = mesh_preview
-        x0 = start if not remesh else (transfer_positions(stored, start, mesh) if start is not None else None)
+        x0 = start if not remesh else carried_shape(stored, start, mesh)  # None: the creases moved, fold afresh
         constraints = None if remesh else held  # pins and glue name vertices of the stored mesh
-        out = yield from _solve_steps(mesh, settings, pct, method, start=x0, warnings=warnings, constraints=constraints)
+        use = settings if x0 is not None else fresh_settings
+        out = yield from _solve_steps(mesh, use, pct, method, start=x0, warnings=warnings, constraints=constraints)
         return lambda: write_refold(
             handle.require("fold object"),
             out,
@@ -550,39 +553,6 @@ class _Previews:
 
     def restore(self):
         self.active.restore()
-
-
-def transfer_positions(old: FoldMesh, old_positions: np.ndarray, new: FoldMesh) -> np.ndarray | None:
-    """Warm start for a re-meshed pattern: each new vertex at the folded position of the point with its flat
-    coordinates on the old mesh (barycentric in the old triangle containing it, or the nearest old vertex).
-    Returns None when the sheets do not overlap (nothing to carry over)."""
-    if old_positions is None:
-        return None
-    tri = old.triangles
-    a, b, c = (old.vertices[tri[:, k], :2] for k in range(3))
-    p = new.vertices[:, :2]
-    out = np.empty((len(p), 3))
-    found = np.zeros(len(p), dtype=bool)
-    v0, v1 = b - a, c - a
-    den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
-    ok = np.abs(den) > 1e-15
-    for lo in range(0, len(p), 256):
-        q = p[lo : lo + 256, None, :] - a[None]
-        u = (q[..., 0] * v1[None, :, 1] - v1[None, :, 0] * q[..., 1]) / np.where(ok, den, 1.0)
-        v = (v0[None, :, 0] * q[..., 1] - q[..., 0] * v0[None, :, 1]) / np.where(ok, den, 1.0)
-        inside = (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9) & ok[None]
-        has = inside.any(axis=1)
-        t = np.argmax(inside, axis=1)
-        rows = np.arange(len(t))
-        uu, vv = u[rows, t], v[rows, t]
-        pa, pb, pc = (old_positions[tri[t, k]] for k in range(3))
-        out[lo : lo + 256] = pa + uu[:, None] * (pb - pa) + vv[:, None] * (pc - pa)
-        found[lo : lo + 256] = has
-    if not found.any():
-        return None
-    for i in np.flatnonzero(~found):
-        out[i] = old_positions[np.argmin(np.sum((old.vertices[:, :2] - p[i]) ** 2, axis=1))]
-    return out
 
 
 def write_refold(

@@ -302,16 +302,16 @@ def test_transfer_positions_carries_the_shape_onto_a_new_mesh(folded, extension)
     """The warm start of a live re-mesh: on the same mesh it is the identity; on a refined mesh, points on old
     triangles land on the old folded surface (a rigid motion of a flat sheet is reproduced exactly)."""
     ob, _, _ = folded
-    folding = mod(extension, "scene.folding")
+    transfer = mod(extension, "core.mesh.transfer")
     mesh = mod(extension, "scene.mesh_object").read_fold_mesh(ob)
     pos = positions_mm(ob)
-    np.testing.assert_allclose(folding.transfer_positions(mesh, pos, mesh), pos, atol=1e-9)
+    np.testing.assert_allclose(transfer.transfer_positions(mesh, pos, mesh), pos, atol=1e-9)
     # A flat sheet moved rigidly: every point of the sheet maps affinely, so interpolation is exact.
     rot = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
     flat = np.c_[mesh.vertices, np.zeros(len(mesh.vertices))]
     moved = flat @ rot.T + [1.0, 2.0, 3.0]
     new = type(mesh)(**{**mesh.__dict__, "vertices": mesh.vertices * 0.98 + 1.0})
-    got = folding.transfer_positions(mesh, moved, new)
+    got = transfer.transfer_positions(mesh, moved, new)
     expect = np.c_[new.vertices, np.zeros(len(new.vertices))] @ rot.T + [1.0, 2.0, 3.0]
     np.testing.assert_allclose(got, expect, atol=1e-6)
 

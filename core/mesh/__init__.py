@@ -8,5 +8,6 @@ angle — for the solver.
 Modules: :mod:`.triangulate` (§3.2, ``triangle`` or ``mathutils`` backends), :mod:`.ruling` (§3.3 swaps on a
 ``bmesh``), :mod:`.squash` (then flips away the caps the fold could press flat; not in the paper), :mod:`.earcut`
 (Origami Simulator's ear clipping, a baseline), :mod:`.build` (pattern → mesh by mesh type, timed),
-:mod:`.fold_mesh` (the mesh's arrays).
+:mod:`.fold_mesh` (the mesh's arrays), :mod:`.transfer` (a folded shape carried onto a re-meshed pattern: the warm
+start of a live re-fold).
 """

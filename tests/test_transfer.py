@@ -1,0 +1,60 @@
+"""The warm start of a live re-fold after an edit that re-meshes the pattern (core/mesh/transfer.py)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.io.reader import read_pattern
+from curved_fold.core.mesh.build import build_mesh
+from curved_fold.core.mesh.transfer import IN_PLACE_SHARE, carried_shape, creases_in_place
+from curved_fold.core.solve.solver import Solver
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.fixture(scope="module")
+def pleats():
+    """``examples/curved_pleats.svg`` meshed and folded at 100 %."""
+    mesh = build_mesh(read_pattern(EXAMPLES / "curved_pleats.svg"))
+    return mesh, Solver(mesh).solve(1.0).positions
+
+
+def _turned(mesh, degrees: float):
+    c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    centre = mesh.vertices.mean(axis=0)
+    return replace(mesh, vertices=(mesh.vertices - centre) @ np.array([[c, s], [-s, c]]) + centre)
+
+
+def test_the_same_pattern_keeps_its_shape(pleats) -> None:
+    mesh, positions = pleats
+    assert creases_in_place(mesh, mesh) == 1.0
+    np.testing.assert_allclose(carried_shape(mesh, positions, mesh), positions, atol=1e-9)
+
+
+def test_a_drawing_turned_or_scaled_as_a_whole_folds_afresh(pleats) -> None:
+    """Turned 20° about the sheet's centre or scaled 1.05, no crease stays where the old fold had it: no warm
+    start (a warm solve from the shape carried by flat position converged to a mangled sheet, or stalled)."""
+    mesh, positions = pleats
+    for moved in (_turned(mesh, 20.0), replace(mesh, vertices=mesh.vertices * 1.05)):
+        assert creases_in_place(mesh, moved) < 0.1
+        assert carried_shape(mesh, positions, moved) is None
+
+
+def test_one_crease_moved_keeps_the_warm_start(pleats) -> None:
+    """One crease of several shifted 3 mm (an edit of one curve): the others are in place, the shape is carried."""
+    mesh, positions = pleats
+    creases = np.isin(mesh.assignments, ("M", "V"))
+    first = mesh.edge_polyline[creases][0]
+    nodes = np.unique(mesh.edges[creases & (mesh.edge_polyline == first)])
+    vertices = mesh.vertices.copy()
+    vertices[nodes, 0] += 3.0
+    moved = replace(mesh, vertices=vertices)
+    share = creases_in_place(mesh, moved)
+    assert IN_PLACE_SHARE <= share < 1.0
+    carried = carried_shape(mesh, positions, moved)
+    assert carried is not None and carried.shape == positions.shape

@@ -241,7 +241,9 @@ def curves_steps(
                     if not identity:
                         segs = [exact_curves.transform_segment(g, transform) for g in segs]
                     source = f"{where} ({stroke.source})" if stroke.source else where
-                    curve = CreaseCurve(segs, assignment, angle, closed=stroke.closed, source=source)
+                    curve = CreaseCurve(
+                        segs, assignment, angle, closed=stroke.closed, source=source, sampled=stroke.sampled
+                    )
                     collected.append((curve, z, (stored.import_id, stroke.index)))
                 continue
             segments: list[CurveSegment] = []
@@ -552,7 +554,9 @@ def objects_from_curves(
             stored: list[list[exact_curves.Stroke]] = []
             for chain in exact_curves.chain_strokes(curves, indices, quantum):
                 strokes = [
-                    exact_curves.Stroke(i, curves[i].source, bool(curves[i].closed), rev, list(curves[i].segments))
+                    exact_curves.Stroke(
+                        i, curves[i].source, bool(curves[i].closed), rev, list(curves[i].segments), curves[i].sampled
+                    )
                     for i, rev in chain
                 ]
                 _add_spline(cu, strokes, scale, quantum)

@@ -47,6 +47,7 @@ class Stroke:
     closed: bool
     reversed: bool
     segments: list[CurveSegment]
+    sampled: bool = False
 
     def oriented(self) -> list[CurveSegment]:
         """The segments in the spline's direction."""
@@ -215,6 +216,7 @@ def description(
                         "src": s.source,
                         "closed": s.closed,
                         "rev": s.reversed,
+                        "sampled": s.sampled,
                         "segs": [_segment_json(g) for g in s.segments],
                     }
                     for s in strokes
@@ -251,6 +253,7 @@ def read_description(data) -> Description | None:
                     bool(s["closed"]),
                     bool(s["rev"]),
                     [_segment_from_json(g) for g in s["segs"]],
+                    bool(s.get("sampled", False)),
                 )
                 for s in strokes
             ]

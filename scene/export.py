@@ -21,6 +21,7 @@ import bpy
 import numpy as np
 
 from ..core.io.atomic import atomic_output
+from ..core.io.svg import SAMPLED_ATTRIBUTE, SAMPLED_VALUE
 from ..core.mesh.fold_mesh import FoldMesh
 
 BLENDER_SUFFIXES = (".obj", ".stl", ".glb", ".gltf", ".blend")
@@ -447,6 +448,7 @@ def write_pattern_svg(
                         attrs += f' opacity="{_svg_number(opacity)}"'
                     src = mesh.sources[poly] if 0 <= poly < len(mesh.sources) else ""
                     data = f" data-source={quoteattr(src)}" if src else ""
+                    data += f' {SAMPLED_ATTRIBUTE}="{SAMPLED_VALUE}"'  # our vertices: read back as written
                     lines.append(f'<polyline {attrs}{data} points="{coords}"/>')
     if cutter:
         body = []

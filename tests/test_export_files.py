@@ -21,6 +21,7 @@ from curved_fold.core.pipeline import fold_pattern  # noqa: E402
 from curved_fold.scene import export  # noqa: E402
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
+DATA = Path(__file__).resolve().parent / "data"
 REPO = Path(__file__).resolve().parents[1]
 
 SLIT_SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="60mm" viewBox="0 0 100 60">
@@ -267,6 +268,22 @@ def test_svg_export_reads_back_as_the_same_pattern_and_fold(empty_scene, tmp_pat
     assert again.result.converged and again.result.iterations == run.result.iterations
     assert again.result.energy == pytest.approx(run.result.energy, rel=1e-9)
     assert again.report["warp_max_deg"] == pytest.approx(run.report["warp_max_deg"], rel=1e-6)
+
+
+def test_svg_export_of_a_finely_sampled_curve_reads_back_vertex_for_vertex(empty_scene, tmp_path):
+    """A helper's case: a wavy crease whose curvature samples it finer than a quarter of the interval. Our export of
+    it, read back, was thinned like a polyline drawn far too finely (nine samples gone: 209 → 191 faces, 29 → 27
+    iterations); the export marks its polylines (``data-curved-fold="sampled"``) and they read back as written."""
+    run = fold_pattern(read_pattern(DATA / "wavy_crease.svg"))
+    out = export.write_pattern_svg(tmp_path / "back.svg", run.mesh)
+    assert 'data-curved-fold="sampled"' in out.read_text()
+    again = fold_pattern(read_pattern(out))
+    assert again.mesh.n_vertices == run.mesh.n_vertices and again.mesh.n_faces == run.mesh.n_faces
+    a = run.mesh.vertices - run.mesh.vertices.min(axis=0)
+    b = again.mesh.vertices - again.mesh.vertices.min(axis=0)
+    assert np.max(np.min(np.linalg.norm(a[:, None] - b[None], axis=2), axis=1)) < 1e-9
+    assert again.result.iterations == run.result.iterations
+    assert again.result.energy == pytest.approx(run.result.energy, rel=1e-9)
 
 
 def test_svg_cutter_layout_has_cut_and_score_layers(empty_scene, tmp_path):

@@ -126,6 +126,10 @@ ANGLE_HINT = "set stroke-opacity (or opacity) to the fold angle / 180° (0.6 for
 """How a stroke gets its fold angle, for the warnings about opacities that give none."""
 
 SHAPES = {"path", "line", "polyline", "polygon", "rect", "circle", "ellipse"}
+SAMPLED_ATTRIBUTE, SAMPLED_VALUE = "data-curved-fold", "sampled"
+"""How Curved Fold's SVG export marks its polylines (a curve's samples, a border's subdivision, as meshed): read
+back, their vertices are kept as written (:attr:`..pattern.model.CreaseCurve.sampled`), not thinned as a polyline
+drawn far finer than the interval is, so the file folds to the mesh it was written from."""
 INHERITED = ("stroke", "stroke-opacity", "fill", "display", "visibility")
 
 
@@ -1304,10 +1308,11 @@ class _Reader:
                 self.group_opacity[group][1] += 1
             if angle is None:
                 self.flat.append(where)
+        sampled = elem.attrib.get(SAMPLED_ATTRIBUTE, "").strip() == SAMPLED_VALUE
         for k, (raw_segs, closed) in enumerate(subpaths):
             source = where if len(subpaths) == 1 else f"{where} subpath {k + 1}"
             segments = [_to_segment(r, place.matrix) for r in raw_segs]
-            self.curves.append(CreaseCurve(segments, assignment, angle, closed=closed, source=source))
+            self.curves.append(CreaseCurve(segments, assignment, angle, closed=closed, source=source, sampled=sampled))
 
     def warnings(self) -> list[str]:
         """One line for each kind of element skipped."""

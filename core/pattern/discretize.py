@@ -1317,8 +1317,10 @@ def discretize_steps(
     from_curve = pieces.from_curve[attrs] | (
         flattened_curves(verts, edges, assignment, angle, tolerance) & drawn_polyline
     )
-    # a polyline sampled far finer than the interval is thinned to the paper's sampling (drawn vertices kept)
-    thin = drawn_polyline & (assignment != "F")
+    # a polyline sampled far finer than the interval is thinned to the paper's sampling (drawn vertices kept), unless
+    # it is a curve we discretised and wrote ourselves (our SVG export's polylines: they read back as written)
+    sampled = np.array([c.sampled for c in curves], dtype=bool)[pieces.polyline[attrs]]
+    thin = drawn_polyline & (assignment != "F") & ~sampled
     kept, chords, source = thin_dense_polylines(verts, edges, assignment, angle, thin, interval, tolerance)
     if len(chords):
         edges = np.concatenate([edges[kept], chords])

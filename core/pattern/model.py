@@ -109,7 +109,8 @@ class CreaseCurve:
     """One drawn stroke: a chain of segments with one role and one fold angle.
 
     ``source`` names where it came from for messages, e.g. ``"SVG <path id='crease3'> (line 12)"`` or
-    ``"curve 'Crease.001' spline 0"``.
+    ``"curve 'Crease.001' spline 0"``. ``sampled``: the stroke's vertices were written by Curved Fold (its SVG
+    export marks its polylines ``data-curved-fold="sampled"``) and are kept as they are: never thinned.
     """
 
     segments: list[CurveSegment]
@@ -117,6 +118,7 @@ class CreaseCurve:
     fold_angle: float | None
     closed: bool = False
     source: str = ""
+    sampled: bool = False
 
     @property
     def is_curved(self) -> bool:

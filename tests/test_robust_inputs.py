@@ -251,6 +251,38 @@ def test_a_crease_that_stops_just_short_of_the_border_is_drawn_onto_it() -> None
         assert report["converged"] and not report["does_not_fold_as_assigned"], report["warnings"]
 
 
+def test_a_crease_that_just_misses_another_is_joined_to_it() -> None:
+    """Drawn with snapping off (a helper's cases, 100 mm sheet, reach 1 mm): a branch that stops 0.3 mm short of the
+    crease ahead of it is joined to it, and one drawn 0.3 mm past it loses the stub, each with a warning naming it;
+    a crease drawn as two strokes whose ends miss by 0.3 mm is joined end to end. A pleat that ends 0.5 mm *beside*
+    its neighbour, and a short stroke that starts at a crossing, are the designer's and stay as drawn."""
+    main = '<path id="main" d="M60 0 L60 100" stroke="#f00"/>'
+    short = pattern_of(BORDER + main + '<path id="branch" d="M0 50 L59.7 50" stroke="#00f"/>')
+    [joined] = [w for w in short.warnings if "joined to it" in w]
+    assert joined.startswith("1 crease end(s) stopped just short of another crease and were joined to it (0.3 mm at")
+    assert "SVG <path id='branch'>" in joined
+    valley = short.edges[short.assignments == "V"]
+    assert np.isclose(short.vertices[valley][..., 0].max(), 60.0)  # it reaches the mountain now
+    past = pattern_of(BORDER + main + '<path id="branch" d="M0 50 L60.3 50" stroke="#00f"/>')
+    [trimmed] = [w for w in past.warnings if "past a crossing" in w]
+    assert trimmed.startswith("1 crease piece(s) drawn a hair past a crossing") and "id='branch'" in trimmed
+    assert np.isclose(past.vertices[past.edges[past.assignments == "V"]][..., 0].max(), 60.0)
+    halves = pattern_of(
+        BORDER + '<path id="a" d="M40 0 L40 49.85" stroke="#f00"/><path id="b" d="M40 50.15 L40 100" stroke="#f00"/>'
+    )
+    assert any("joined to it (0.3 mm" in w for w in halves.warnings), halves.warnings
+    ends = np.flatnonzero(np.bincount(halves.edges[halves.assignments == "M"].ravel()) == 1)
+    assert len(ends) == 2 and np.isin(ends, halves.edges[halves.assignments == "B"]).all()  # one crease, edge to edge
+    report = fold_pattern(halves, angle=90).report
+    assert report["converged"] and not report["does_not_fold_as_assigned"]
+    beside = pattern_of(
+        BORDER + '<path id="a" d="M40 0 L40 60" stroke="#f00"/><path id="b" d="M40.5 100 L40.5 50" stroke="#00f"/>'
+    )
+    stub = pattern_of(BORDER + main + '<path id="tab" d="M60 50 L60.8 50" stroke="#00f"/>')
+    for p in (beside, stub):
+        assert not any("joined to it" in w or "past a crossing" in w for w in p.warnings), p.warnings
+
+
 # ----------------------------------------------------------------------------------------------- curves
 
 

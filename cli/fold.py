@@ -141,6 +141,15 @@ def _write_mesh(tmp: Path, out: Path, fold, quiet: bool = False, unit: str | Non
         raise OutputError(f"--out {out}: {exc}; the old file (if any) is kept") from None
 
 
+def _convergence(report: dict) -> str:
+    """How the run ended, for the summary line: "converged", "converged to round-off" (the residual is above the
+    tolerance, but no representable position is measurably closer: the report's ``converged_to_round_off``), or
+    "NOT converged"."""
+    if not report["converged"]:
+        return "NOT converged"
+    return "converged to round-off" if report.get("converged_to_round_off") else "converged"
+
+
 def run(args: argparse.Namespace) -> int:
     from ..core.io.reader import read_pattern
     from ..core.pipeline import fold_pattern
@@ -179,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"{args.input}: {r['faces']} faces ({r['mesh_type']}, {r['generation_ms']:.0f} ms), "
         f"{r['solver']} solver {r['simulation_ms']:.0f} ms, {r['iterations']} iterations, "
-        f"{'converged' if r['converged'] else 'NOT converged'} (residual {r['residual']:.1e})"
+        f"{_convergence(r)} (residual {r['residual']:.1e})"
     )
     warp = r["warp_mean_deg"]  # None (nan) when no panel edge bends the authors' 0.5°: at 0 %, or rigid panels
     warp_text = f"warp mean {warp:.2f}°" if warp is not None and math.isfinite(warp) else "no warp (panels flat)"

@@ -118,6 +118,8 @@ def make_report(
         "hessian_assemblies": int(result.hessian_assemblies),
         "linear_solves": int(result.linear_solves),
         "converged": bool(result.converged),
+        # converged with the residual above the tolerance: no representable position is measurably closer
+        "converged_to_round_off": bool(result.converged and result.message.startswith("converged to round-off")),
         "residual": float(result.residual),
         "energy": float(result.energy),
         "message": result.message,

@@ -105,6 +105,25 @@ def test_cli_summary_says_no_warp_instead_of_nan(tmp_path, capfd):
     assert json.loads(rep.read_text())["warp_mean_deg"] is None
 
 
+def test_a_fold_converged_to_round_off_says_so_in_the_report_and_the_summary(tmp_path, capfd):
+    """A helper's 266-face pattern of long straight pleats crossed by sine creases (``tests/data``) converges to
+    round-off at 100 %: residual 4.8e-6 above the 1e-6 tolerance, where moving the positions by one unit in the last
+    place changes it by 1.1e-5. The report said only ``converged: true`` and the summary "converged"; a script
+    reading either could not tell. The report has ``converged_to_round_off`` and the summary says it."""
+    from curved_fold.cli import main
+
+    pattern = Path(__file__).resolve().parent / "data" / "sine_across_pleats.svg"
+    out, rep = tmp_path / "sine.fold", tmp_path / "sine.json"
+    assert main(["fold", str(pattern), "--out", str(out), "--report", str(rep)]) == 0
+    report = json.loads(rep.read_text())
+    assert report["converged"] and report["converged_to_round_off"] and report["residual"] > 1e-6
+    assert "converged to round-off (residual" in capfd.readouterr().out
+    simple = Path(__file__).resolve().parent / "fixtures" / "origami-simulator" / "simpleVertex.svg"
+    assert main(["fold", str(simple), "--out", str(out), "--report", str(rep)]) == 0
+    assert not json.loads(rep.read_text())["converged_to_round_off"]
+    assert "converged (residual" in capfd.readouterr().out
+
+
 def test_cli_writes_stl_in_millimetres_for_slicers(tmp_path, capsys):
     """The command line had no millimetre output: its OBJ is in metres (a slicer read wavy_pleats as 0.065 mm) and
     .stl was an unknown output type. STL is written in millimetres, Z up, as the add-on's Export does; ``--unit``

@@ -1203,24 +1203,47 @@ class _EndMover:
             np.concatenate([self.attrs, np.array(self.extra_attrs, dtype=self.attrs.dtype)]),
         )
 
+    def points(self, ids: np.ndarray) -> np.ndarray:
+        """Positions of vertices ``ids`` (old or added)."""
+        ids = np.asarray(ids, dtype=np.int64)
+        out = np.empty((len(ids), 2))
+        old = ids < len(self.verts)
+        out[old] = self.verts[ids[old]]
+        if not old.all():
+            out[~old] = np.array(self.new_verts).reshape(-1, 2)[ids[~old] - len(self.verts)]
+        return out
+
+    def rows(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Vertex pairs and attributes of edges ``idx`` (indices into :meth:`current`)."""
+        idx = np.asarray(idx, dtype=np.int64)
+        pairs, attrs = np.empty((len(idx), 2), dtype=np.int64), np.empty(len(idx), dtype=self.attrs.dtype)
+        old = idx < len(self.edges)
+        pairs[old], attrs[old] = self.edges[idx[old]], self.attrs[idx[old]]
+        if not old.all():
+            extra = idx[~old] - len(self.edges)
+            pairs[~old] = np.array(self.extra_edges, dtype=np.int64).reshape(-1, 2)[extra]
+            attrs[~old] = np.array(self.extra_attrs, dtype=self.attrs.dtype)[extra]
+        return pairs, attrs
+
+    def n_edges(self) -> int:
+        return len(self.edges) + len(self.extra_edges)
+
     def move(self, w: int, side: int, target_edge: int, foot: np.ndarray) -> bool:
         """End ``side`` of edge ``w`` onto ``foot``, a point of edge ``target_edge`` (an index into
         :meth:`current`); False when that would collapse ``w``."""
-        pts, all_e, all_a = self.current()
-        ends = all_e[target_edge]
-        near = np.hypot(*(pts[ends] - foot).T)
-        n = len(self.verts)
+        (ends,), (attr,) = self.rows([target_edge])
+        near = np.hypot(*(self.points(ends) - foot).T)
         if near.min() <= self.merge_tolerance:
             target = int(ends[int(np.argmin(near))])
         else:  # split the target piece at the foot
-            target = n + len(self.new_verts)
+            target = len(self.verts) + len(self.new_verts)
             self.new_verts.append(foot)
             if target_edge < len(self.edges):
                 self.edges[target_edge] = (ends[0], target)
             else:
                 self.extra_edges[target_edge - len(self.edges)] = (int(ends[0]), target)
             self.extra_edges.append((target, int(ends[1])))
-            self.extra_attrs.append(int(all_a[target_edge]))
+            self.extra_attrs.append(int(attr))
         if target == self.edges[w, 1 - side]:
             return False
         self.edges[w, side] = target
@@ -1339,38 +1362,76 @@ def _join_near_misses(
     degree = np.bincount(edges.ravel(), minlength=len(verts))
     length = np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T)
     junction = edges[which, 1 - sides]
-    stub = (length[which] <= reach) & (degree[junction] >= 3)
-    for k in np.flatnonzero(stub):  # a stub is the end of a stroke drawn on past a crossing, not a short stroke
-        at = np.flatnonzero(np.any(edges == junction[k], axis=1))
-        same = pieces.polyline[attrs[at]] == pieces.polyline[attrs[which[k]]]
-        stub[k] = np.count_nonzero(same) >= 2
+    # a stub is the end of a stroke drawn on past a crossing (the stroke has another piece at the junction), not a
+    # short stroke that starts there
+    strokes = int(pieces.polyline.max()) + 1
+    at_vertex, at_count = np.unique(edges.ravel() * strokes + np.repeat(pieces.polyline[attrs], 2), return_counts=True)
+    same_stroke = at_count[np.searchsorted(at_vertex, junction * strokes + pieces.polyline[attrs[which]])]
+    stub = (length[which] <= reach) & (degree[junction] >= 3) & (same_stroke >= 2)
     joined: list[tuple[float, np.ndarray, int]] = []
     mover = _EndMover(verts, edges, attrs, merge_tolerance)
     cone = math.cos(math.radians(NEAR_MISS_CONE_DEG))
-    for w, side in zip(which[~stub], sides[~stub], strict=True):
-        pts, all_e, all_a = mover.current()
-        if np.count_nonzero(all_e == mover.edges[w, side]) != 1:
-            continue  # another end was joined to this one
-        p, back = pts[mover.edges[w, side]], pts[mover.edges[w, 1 - side]]
-        ahead = (p - back) / max(float(np.hypot(*(p - back))), 1e-300)
-        others = np.flatnonzero(
-            (pieces.polyline[all_a] != pieces.polyline[attrs[w]]) & ~np.any(all_e == mover.edges[w, side], axis=1)
-        )
-        if not len(others):
-            continue
-        a, b = pts[all_e[others, 0]], pts[all_e[others, 1]]
-        foot = segment_foot(np.broadcast_to(p, a.shape), a, b)
-        gap = foot - p
+    ends_w, ends_side = which[~stub], sides[~stub]
+    # the strokes near each end (bounding boxes within reach, from the grid): the work grows with the near pairs
+    n_e, tip = len(edges), verts[edges[ends_w, ends_side]]
+    i, j = _candidate_pairs(np.concatenate([verts[edges[:, 0]], tip]), np.concatenate([verts[edges[:, 1]], tip]), reach)
+    near = (i < n_e) & (j >= n_e)
+    near_edge, near_end = i[near], j[near] - n_e
+    order = np.argsort(near_end, kind="stable")
+    near_edge, near_end = near_edge[order], near_end[order]
+    # every end's nearest stroke ahead of it, all ends at once; then the moves, one at a time (a piece split by an
+    # earlier move is looked at again with its new halves)
+    keep = (pieces.polyline[attrs[near_edge]] != pieces.polyline[attrs[ends_w[near_end]]]) & ~np.any(
+        edges[near_edge] == edges[ends_w[near_end], ends_side[near_end]][:, None], axis=1
+    )
+    near_edge, near_end = near_edge[keep], near_end[keep]
+    tips, backs = verts[edges[ends_w, ends_side]], verts[edges[ends_w, 1 - ends_side]]
+    ahead = tips - backs
+    ahead /= np.maximum(np.hypot(*ahead.T), 1e-300)[:, None]
+
+    def nearest_ahead(end: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For pairs (end, piece a → b): the foot on the piece, its distance, and whether it counts."""
+        foot = segment_foot(tips[end], a, b)
+        gap = foot - tips[end]
         dist = np.hypot(*gap.T)
-        facing = gap @ ahead >= cone * dist
-        ok = facing & (dist > merge_tolerance * (1.0 + 1e-6)) & (dist <= reach)
-        if not ok.any():
-            continue
-        k = int(np.flatnonzero(ok)[np.argmin(dist[ok])])
-        if _crosses_any(back, foot[k], pts, all_e, int(mover.edges[w, 1 - side]), int(others[k])):
+        facing = np.einsum("ij,ij->i", gap, ahead[end]) >= cone * dist
+        return foot, dist, facing & (dist > merge_tolerance * (1.0 + 1e-6)) & (dist <= reach)
+
+    foot, dist, ok = nearest_ahead(near_end, verts[edges[near_edge, 0]], verts[edges[near_edge, 1]])
+    order = np.lexsort((dist[ok], near_end[ok]))
+    candidate_end = near_end[ok][order]
+    first = np.r_[True, candidate_end[1:] != candidate_end[:-1]] if len(candidate_end) else np.zeros(0, bool)
+    split: set[int] = set()
+    for c in np.flatnonzero(ok)[order][first]:
+        k = int(near_end[c])
+        w, side = int(ends_w[k]), int(ends_side[k])
+        tip_v, back_v = int(mover.edges[w, side]), int(mover.edges[w, 1 - side])
+        if degree[tip_v] != 1:
+            continue  # another end was joined to this one
+        target, at, gap = int(near_edge[c]), foot[c], float(dist[c])
+        if target in split:  # look again, at its halves and every piece added since
+            pieces_now = np.r_[target, np.arange(n_e, mover.n_edges())]
+            pairs, stroke_attrs = mover.rows(pieces_now)
+            own = pieces.polyline[stroke_attrs] == pieces.polyline[attrs[w]]
+            end = np.full(len(pieces_now), k)
+            f2, d2, ok2 = nearest_ahead(end, mover.points(pairs[:, 0]), mover.points(pairs[:, 1]))
+            ok2 &= ~own & ~np.any(pairs == tip_v, axis=1)
+            if not ok2.any():
+                continue
+            best = int(np.flatnonzero(ok2)[np.argmin(d2[ok2])])
+            target, at, gap = int(pieces_now[best]), f2[best], float(d2[best])
+        pts, all_e, _ = mover.current()
+        if _crosses_any(backs[k], at, pts, all_e, back_v, target):
             continue  # the end moved there would cross another stroke: the drawing stays as it is
-        if mover.move(w, side, int(others[k]), foot[k]):
-            joined.append((float(dist[k]), p, int(attrs[w])))
+        n_before = mover.n_edges()
+        if mover.move(w, side, target, at):
+            joined.append((gap, tips[k], int(attrs[w])))
+            if mover.n_edges() > n_before:
+                split.add(target)
+            degree[tip_v] -= 1
+            moved_to = int(mover.edges[w, side])
+            degree = np.concatenate([degree, np.zeros(max(0, moved_to + 1 - len(degree)), dtype=degree.dtype)])
+            degree[moved_to] += 1 if mover.n_edges() == n_before else 3  # a new vertex: its two halves and this end
     verts, edges, attrs = mover.result()
     trimmed = which[stub]
     if len(trimmed):

@@ -136,7 +136,20 @@ def simulated_fold_angles(ob: bpy.types.Object) -> np.ndarray | None:
     me = ob.data
     if me.attributes.get("cf_fold_angle_sim") is None:
         return None
-    return _get_attr(me, "cf_fold_angle_sim", "value", np.float32, len(me.edges)).astype(np.float64)
+    values = _get_attr(me, "cf_fold_angle_sim", "value", np.float32, len(me.edges)).astype(np.float64)
+    return values[_sorted_edges(me)[1]]
+
+
+def _sorted_edges(me: bpy.types.Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Blender's edges as sorted vertex pairs in the order a built :class:`FoldMesh` has them (by first vertex, then
+    second), and the permutation from Blender's order. Read back in Blender's own order, a Re-fold summed the hinges
+    in another order than the Fold: on a pattern that stops at the round-off floor 159 iterations became 176, and a
+    vertex moved 3 mm."""
+    pairs = np.empty(2 * len(me.edges), dtype=np.int64)
+    me.edges.foreach_get("vertices", pairs)
+    pairs = np.sort(pairs.reshape(-1, 2), axis=1)
+    order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+    return pairs[order], order
 
 
 def assignment_codes(assignments: np.ndarray) -> np.ndarray:
@@ -478,17 +491,16 @@ def _topology_key(mesh: FoldMesh) -> str:
 def read_fold_mesh(ob: bpy.types.Object) -> FoldMesh:
     """Rebuild the flat :class:`FoldMesh` stored on a fold object (inverse of :func:`create_fold_object`).
 
-    Edges come back in Blender's order; the crease-pattern face loops are recovered from ``cf_face`` (the outer
-    boundary of each group of triangles). Raises ``ValueError`` naming the object when an attribute is missing.
+    Edges come back in the order a built mesh has them (:func:`_sorted_edges`); the crease-pattern face loops are
+    recovered from ``cf_face`` (the outer boundary of each group of triangles). Raises ``ValueError`` naming the
+    object when an attribute is missing.
     """
     if ob is None or ob.type != "MESH":
         raise ValueError(f"'{getattr(ob, 'name', None)}' is not a mesh object")
     me = ob.data
     n, e, t = len(me.vertices), len(me.edges), len(me.polygons)
     flat = _exact(me, EXACT_FLAT_KEY, _get_attr(me, "cf_flat", "vector", np.float32, n, 2)) * flat_rescale(me)
-    edges = np.empty(2 * e, dtype=np.int64)
-    me.edges.foreach_get("vertices", edges)
-    edges = np.sort(edges.reshape(-1, 2), axis=1)
+    edges, order = _sorted_edges(me)
     loops = np.empty(len(me.loops), dtype=np.int64)
     me.loops.foreach_get("vertex_index", loops)
     sizes = np.empty(t, dtype=np.int64)
@@ -496,10 +508,10 @@ def read_fold_mesh(ob: bpy.types.Object) -> FoldMesh:
     if t and not np.all(sizes == 3):
         raise ValueError(f"mesh '{me.name}' has non-triangle faces: was it edited after folding?")
     triangles = loops.reshape(-1, 3)
-    codes = _get_attr(me, "cf_assignment", "value", np.int32, e)
-    angles = _exact(me, EXACT_ANGLE_KEY, _get_attr(me, "cf_fold_angle", "value", np.float32, e))
-    from_curve = _get_attr(me, "cf_from_curve", "value", bool, e)
-    polyline = _get_attr(me, "cf_polyline", "value", np.int32, e).astype(np.int64)
+    codes = _get_attr(me, "cf_assignment", "value", np.int32, e)[order]
+    angles = _exact(me, EXACT_ANGLE_KEY, _get_attr(me, "cf_fold_angle", "value", np.float32, e))[order]
+    from_curve = _get_attr(me, "cf_from_curve", "value", bool, e)[order]
+    polyline = _get_attr(me, "cf_polyline", "value", np.int32, e).astype(np.int64)[order]
     tri_face = _get_attr(me, "cf_face", "value", np.int32, t).astype(np.int64)
     assignments = np.array(ASSIGNMENTS)[np.clip(codes, 0, len(ASSIGNMENTS) - 1)]
     return FoldMesh(

@@ -20,9 +20,9 @@ Steps, in order:
    If the border is then closed, crease pieces lying outside it (creases drawn slightly past the
    edge of the sheet) are removed, with a warning; a crossing on the border never snaps to a vertex off it, so the
    outline stays where it was drawn. Free ends of creases and cuts that stop just short of the border
-   (:data:`SHORT_OF_BORDER_FRACTION`) are moved onto it, with a warning (:func:`_snap_short_ends`); so are free ends
-   that stop as short of another stroke ahead of them, and pieces drawn as far past a crossing to a free end are
-   removed (:func:`_join_near_misses`).
+   (:data:`SHORT_OF_BORDER_FRACTION`) are moved onto it, with a warning (:func:`_snap_short_ends`); crease ends
+   that stop as short (of the sheet's width) of another stroke ahead of them are drawn on to it, and pieces drawn as
+   far past a crossing to a free end are removed (:func:`_join_near_misses`).
 5. **Samples beside junctions.** A curve sample point left a small fraction of a chord from a crossing or T-junction
    on its curve is removed where the curve stays within ``tolerance`` of the new chord (the short piece would force
    sliver triangles; :func:`_drop_samples_beside_junctions`).
@@ -1228,12 +1228,13 @@ class _EndMover:
     def n_edges(self) -> int:
         return len(self.edges) + len(self.extra_edges)
 
-    def move(self, w: int, side: int, target_edge: int, foot: np.ndarray) -> bool:
+    def move(self, w: int, side: int, target_edge: int, foot: np.ndarray, snap: float = 0.0) -> bool:
         """End ``side`` of edge ``w`` onto ``foot``, a point of edge ``target_edge`` (an index into
-        :meth:`current`); False when that would collapse ``w``."""
+        :meth:`current`), or onto an end of that edge within ``snap`` (at least the merge tolerance) of it; False
+        when that would collapse ``w``."""
         (ends,), (attr,) = self.rows([target_edge])
         near = np.hypot(*(self.points(ends) - foot).T)
-        if near.min() <= self.merge_tolerance:
+        if near.min() <= max(self.merge_tolerance, snap):
             target = int(ends[int(np.argmin(near))])
         else:  # split the target piece at the foot
             target = len(self.verts) + len(self.new_verts)
@@ -1345,20 +1346,27 @@ def _join_near_misses(
     merge_tolerance: float,
     warnings: list[str],
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Step 4 (end): a free end of a crease or cut that stops just short of *another* stroke ahead of it (within
-    :data:`SHORT_OF_BORDER_FRACTION` of the sheet, and :data:`NEAR_MISS_CONE_DEG` of its direction) is moved onto
-    it, as an end short of the border is, with a warning naming it; and a piece that runs from a junction a hair past
-    it (as short, to a free end, where its stroke goes on across the junction) is removed, as the part of a crease
-    drawn past the border is.
+    """Step 4 (end): a free end of a crease that stops just short of *another* stroke ahead of it (within
+    :data:`SHORT_OF_BORDER_FRACTION` of the sheet's width, its smaller extent, and :data:`NEAR_MISS_CONE_DEG` of its
+    direction) is drawn on to where it meets it (where its straight continuation hits the stroke, else the stroke's
+    nearest point; onto an end of the piece within a quarter of the gap, so an end aimed at a crossing reaches the
+    crossing), with a warning naming it; and a piece that runs from a junction a hair past it (as short, to a free
+    end, where its stroke goes on across the junction) is removed, as the part of a crease drawn past the border is.
+    Cuts are left as drawn, and are no target: the paper between a cut's end and another cut is a bridge (a
+    reviewer's kirigami sheets fell apart).
 
     Drawn by hand with snapping off, a T-junction stops or overshoots by a few tenths of a millimetre, and a crease
     drawn as two strokes leaves a gap between them. Left so, the crease ended inside the paper (a helper's 200 mm
     sheet, 0.3 mm: strain 0.25 % instead of 0.15 %, fold-angle error 9° instead of 4.4°), silently."""
     assign = pieces.assignment[attrs]
-    reach = SHORT_OF_BORDER_FRACTION * size
     which, sides = _loose_ends(edges, assign, len(verts))
+    crease_end = np.isin(assign[which], ["M", "V", "U"])  # a cut's gap is a bridge of paper: kept as drawn
+    which, sides = which[crease_end], sides[crease_end]
     if not len(which):
         return verts, edges, attrs
+    outline = np.unique(edges[assign == "B"]) if (assign == "B").any() else np.unique(edges)
+    extent = np.ptp(verts[outline], axis=0)
+    reach = SHORT_OF_BORDER_FRACTION * float(extent.min() if extent.min() > 0 else size)  # a strip's width
     degree = np.bincount(edges.ravel(), minlength=len(verts))
     length = np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T)
     junction = edges[which, 1 - sides]
@@ -1381,8 +1389,12 @@ def _join_near_misses(
     near_edge, near_end = near_edge[order], near_end[order]
     # every end's nearest stroke ahead of it, all ends at once; then the moves, one at a time (a piece split by an
     # earlier move is looked at again with its new halves)
-    keep = (pieces.polyline[attrs[near_edge]] != pieces.polyline[attrs[ends_w[near_end]]]) & ~np.any(
-        edges[near_edge] == edges[ends_w[near_end], ends_side[near_end]][:, None], axis=1
+    target_ok = assign != "C"  # not a cut (the paper beyond it is another flap), nor a stub about to go
+    target_ok[which[stub]] = False
+    keep = (
+        target_ok[near_edge]
+        & (pieces.polyline[attrs[near_edge]] != pieces.polyline[attrs[ends_w[near_end]]])
+        & ~np.any(edges[near_edge] == edges[ends_w[near_end], ends_side[near_end]][:, None], axis=1)
     )
     near_edge, near_end = near_edge[keep], near_end[keep]
     tips, backs = verts[edges[ends_w, ends_side]], verts[edges[ends_w, 1 - ends_side]]
@@ -1390,18 +1402,36 @@ def _join_near_misses(
     ahead /= np.maximum(np.hypot(*ahead.T), 1e-300)[:, None]
 
     def nearest_ahead(end: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """For pairs (end, piece a → b): the foot on the piece, its distance, and whether it counts."""
-        foot = segment_foot(tips[end], a, b)
-        gap = foot - tips[end]
+        """For pairs (end, piece a → b): where the end meets the piece — the crease drawn on straight ahead, where
+        it hits the piece (an end aimed at a crossing goes to the crossing), else the nearest point of the piece —
+        its distance, and whether it counts."""
+        tip, d = tips[end], ahead[end]
+        point = segment_foot(tip, a, b)
+        r = b - a
+        den = d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = ((a - tip)[:, 0] * r[:, 1] - (a - tip)[:, 1] * r[:, 0]) / den
+            u = ((a - tip)[:, 0] * d[:, 1] - (a - tip)[:, 1] * d[:, 0]) / den
+        hit = (np.abs(den) > 1e-12 * np.hypot(*r.T)) & (t >= 0) & (u >= 0) & (u <= 1)
+        point = np.where(hit[:, None], tip + np.where(hit, t, 0.0)[:, None] * d, point)
+        gap = point - tip
         dist = np.hypot(*gap.T)
-        facing = np.einsum("ij,ij->i", gap, ahead[end]) >= cone * dist
-        return foot, dist, facing & (dist > merge_tolerance * (1.0 + 1e-6)) & (dist <= reach)
+        facing = np.einsum("ij,ij->i", gap, d) > cone * dist
+        return point, dist, facing & (dist > merge_tolerance * (1.0 + 1e-6)) & (dist <= reach)
 
     foot, dist, ok = nearest_ahead(near_end, verts[edges[near_edge, 0]], verts[edges[near_edge, 1]])
     order = np.lexsort((dist[ok], near_end[ok]))
     candidate_end = near_end[ok][order]
     first = np.r_[True, candidate_end[1:] != candidate_end[:-1]] if len(candidate_end) else np.zeros(0, bool)
     split: set[int] = set()
+
+    def target_ok_now(idx: np.ndarray, stroke_attrs: np.ndarray) -> np.ndarray:
+        """:data:`target_ok` for pieces of :meth:`_EndMover.current` (added halves: by their stroke's role)."""
+        out = pieces.assignment[stroke_attrs] != "C"
+        old = idx < n_e
+        out[old] &= target_ok[idx[old]]
+        return out
+
     for c in np.flatnonzero(ok)[order][first]:
         k = int(near_end[c])
         w, side = int(ends_w[k]), int(ends_side[k])
@@ -1415,7 +1445,7 @@ def _join_near_misses(
             own = pieces.polyline[stroke_attrs] == pieces.polyline[attrs[w]]
             end = np.full(len(pieces_now), k)
             f2, d2, ok2 = nearest_ahead(end, mover.points(pairs[:, 0]), mover.points(pairs[:, 1]))
-            ok2 &= ~own & ~np.any(pairs == tip_v, axis=1)
+            ok2 &= ~own & ~np.any(pairs == tip_v, axis=1) & target_ok_now(pieces_now, stroke_attrs)
             if not ok2.any():
                 continue
             best = int(np.flatnonzero(ok2)[np.argmin(d2[ok2])])
@@ -1424,7 +1454,7 @@ def _join_near_misses(
         if _crosses_any(backs[k], at, pts, all_e, back_v, target):
             continue  # the end moved there would cross another stroke: the drawing stays as it is
         n_before = mover.n_edges()
-        if mover.move(w, side, target, at):
+        if mover.move(w, side, target, at, snap=0.25 * gap):
             joined.append((gap, tips[k], int(attrs[w])))
             if mover.n_edges() > n_before:
                 split.add(target)

@@ -35,6 +35,7 @@ from ..core.io.reader import register_blend_reader
 from ..core.pattern.model import CreaseCurve, CurveSegment, PatternError
 from . import exact_curves
 from .properties import ASSIGNMENT_ROLE, ROLE_ASSIGNMENT
+from .single_precision import as_typed
 
 READ_UNIT_MS = 30.0
 """Work per unit of :func:`curves_steps` (ms): a Blender job's slice runs whole units."""
@@ -53,7 +54,7 @@ ANGLE_DECIMALS = 4
 def default_unit_scale(scene: bpy.types.Scene | None = None) -> float:
     """Blender units per millimetre in ``scene`` (the context scene by default): ``1 / (1000 × scale_length)``."""
     scene = scene or bpy.context.scene
-    scale = float(scene.unit_settings.scale_length) if scene is not None else 1.0
+    scale = as_typed(scene.unit_settings.scale_length) if scene is not None else 1.0
     # scale_length is a float32 (0.001 reads back as 0.0010000000475): round to its 7 significant digits so a
     # typed-in 0.001 means exactly 1 BU = 1 mm.
     scale = float(f"{scale:.7g}")

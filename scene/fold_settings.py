@@ -27,6 +27,8 @@ from bpy.props import (
     StringProperty,
 )
 
+from .single_precision import as_typed
+
 
 def engine_id(identifier: str) -> str:
     """The engine's name (``core.mesh.build``'s mesh types, ``core.solve.solver``'s methods) of a Blender enum
@@ -298,14 +300,6 @@ def override_fold_angles(pattern, angle: float | None):
     angles[assign == "V"] = abs(float(angle))
     angles[assign == "M"] = -abs(float(angle))
     return replace(pattern, fold_angles=angles)
-
-
-def as_typed(value: float) -> float:
-    """A single-precision property's value as the decimal it shows (0.7, not 0.699999988079071): Blender keeps
-    float properties in single precision, and the engine's defaults and the command line are the decimals, so a
-    Re-fold with the default stiffnesses solved a model 1e-8 apart from the Fold's (on a pattern that stops at the
-    round-off floor: 116 iterations instead of 159, a vertex 3 mm away)."""
-    return float(str(np.float32(value)))
 
 
 def settings_dict(props: CURVED_FOLD_PG_mesh) -> dict:

@@ -34,6 +34,7 @@ import numpy as np
 from ..core.mesh.fold_mesh import FoldMesh
 from ..core.pattern.model import ASSIGNMENTS
 from ..core.pattern.polylines import chain_edges
+from .single_precision import as_typed
 
 CREASE_COLOURS = {"M": (1.0, 0.0, 0.0, 1.0), "V": (0.0, 0.1, 1.0, 1.0)}
 """Viewport colours of crease edges, as Origami Simulator draws them (mountain red, valley blue)."""
@@ -50,7 +51,7 @@ _EDGE_ATTRS = ("cf_assignment", "cf_fold_angle", "cf_fold_angle_sim", "cf_from_c
 def mm_per_unit(scene: bpy.types.Scene | None = None) -> float:
     """Millimetres per Blender unit in ``scene`` (1 BU = 1000 mm × ``unit_settings.scale_length``)."""
     scene = scene or bpy.context.scene
-    scale = float(scene.unit_settings.scale_length) if scene is not None else 1.0
+    scale = as_typed(scene.unit_settings.scale_length) if scene is not None else 1.0
     return 1000.0 * (scale if scale > 0 else 1.0)
 
 

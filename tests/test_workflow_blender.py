@@ -140,6 +140,18 @@ def test_refold_of_an_unedited_fold_is_the_fold(extension, clean_scene, unit_sca
         np.testing.assert_array_equal(np.array([v.co for v in ob.data.vertices]), folded[2])
 
 
+def test_imports_at_a_millimetre_unit_scale_give_the_command_line_pattern(extension, clean_scene):
+    """With the scene's Unit Scale at 0.001 (1 Blender unit = 1 mm), single precision holds 0.0010000000474974513:
+    read as is, every imported point moved by up to 9.5e-6 mm and a pattern that stops at the round-off floor folded
+    in 113 iterations instead of the command line's 159. The scale is read as the decimal shown."""
+    reader = ext_module(extension, "core.io.reader")
+    folding = ext_module(extension, "scene.folding")
+    bpy.context.scene.unit_settings.scale_length = 0.001
+    path = FIXTURES / "origami-simulator" / "Treble_Clef.svg"
+    ours = folding.pattern_from_objects(import_file(path))
+    np.testing.assert_array_equal(ours.vertices, reader.read_pattern(path).vertices)
+
+
 @pytest.mark.parametrize("path", FOLDS)
 def test_fold_operator_figures_equal_the_command_line(extension, clean_scene, path):
     reader = ext_module(extension, "core.io.reader")

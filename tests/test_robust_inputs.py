@@ -285,8 +285,9 @@ def test_a_crease_that_just_misses_another_is_joined_to_it() -> None:
 
 def test_near_miss_joins_keep_bridges_aim_at_crossings_and_close_an_x() -> None:
     """A reviewer's cases (200 mm sheets, reach 2 mm): a cut's gap is a bridge of paper and is kept (an L of cuts
-    1.5 mm short of each other had cut the sheet in two); a valley aimed at a crossing 1.5 mm away goes to the
-    crossing (it went to the nearest point of one crease, 0.75 mm off, kinked: fold-angle error 19° instead of 5°);
+    1.5 mm short of each other had cut the sheet in two; so is a tab between a cut and the border); a valley aimed
+    at a crossing 1.5 mm away goes to the crossing (it went to the nearest point of one crease, 0.75 mm off, kinked:
+    fold-angle error 19° instead of 5°);
     a mountain drawn as two strokes across a valley, one 0.5 mm past and the other 0.3 mm short of that, becomes the
     clean X (the short one was joined to the stub that was then removed); on a 600 × 30 mm strip the reach is 1 % of
     the width, so cross creases ending 5 mm from the centre line stay as drawn."""
@@ -300,6 +301,8 @@ def test_near_miss_joins_keep_bridges_aim_at_crossings_and_close_an_x() -> None:
         border + '<path id="c0" d="M0 100 L98.5 100" stroke="#0f0"/><path id="c1" d="M100 0 L100 110" stroke="#0f0"/>'
     )
     assert not any("joined" in w for w in bridge.warnings), bridge.warnings
+    tab = read(border + '<path id="c" d="M50 0 L50 198.5" stroke="#0f0"/>')  # a cut 1.5 mm short of the edge
+    assert not any("short of the border" in w for w in tab.warnings), tab.warnings
     valley = '<path id="v0" d="M0 100 L200 100" stroke="#00f"/>'
     aim = read(
         border + valley + '<path id="m1" d="M100 0 L100 200" stroke="#f00"/>'

@@ -19,7 +19,7 @@ Steps, in order:
    across or loose inside the sheet) are read as cuts, with a warning naming them (:func:`_stray_border_as_cuts`).
    If the border is then closed, crease pieces lying outside it (creases drawn slightly past the
    edge of the sheet) are removed, with a warning; a crossing on the border never snaps to a vertex off it, so the
-   outline stays where it was drawn. Free ends of creases and cuts that stop just short of the border
+   outline stays where it was drawn. Free ends of creases (not cuts) that stop just short of the border
    (:data:`SHORT_OF_BORDER_FRACTION`) are moved onto it, with a warning (:func:`_snap_short_ends`); crease ends
    that stop as short (of the sheet's width) of another stroke ahead of them are drawn on to it, and pieces drawn as
    far past a crossing to a free end are removed (:func:`_join_near_misses`).
@@ -1255,9 +1255,11 @@ class _EndMover:
 
 
 def _loose_ends(edges: np.ndarray, assign: np.ndarray, n_verts: int) -> tuple[np.ndarray, np.ndarray]:
-    """Free ends of creases and cuts: ``(edge, side)`` index arrays of segment ends at a vertex of degree 1."""
+    """Free ends of creases: ``(edge, side)`` index arrays of segment ends at a vertex of degree 1. Not of cuts: the
+    paper between a cut's end and the border or another cut is a bridge that holds a flap (a kirigami tab), and
+    joining it cut a reviewer's sheets apart."""
     degree = np.bincount(edges.ravel(), minlength=n_verts)
-    loose = (degree[edges] == 1) & np.isin(assign, ["M", "V", "U", "C"])[:, None]
+    loose = (degree[edges] == 1) & np.isin(assign, ["M", "V", "U"])[:, None]
     return np.nonzero(loose)
 
 
@@ -1271,10 +1273,10 @@ def _snap_short_ends(
     merge_tolerance: float,
     warnings: list[str],
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Step 4 (end): free ends of creases and cuts that stop just short of the closed border (within
-    :data:`SHORT_OF_BORDER_FRACTION` of the sheet) are moved onto it, at the nearest point of the border (a vertex
-    of it within ``merge_tolerance``, else a new one that splits its piece), with a warning naming them when the gap
-    was beyond the merge tolerance.
+    """Step 4 (end): free ends of creases (not cuts: :func:`_loose_ends`) that stop just short of the closed border
+    (within :data:`SHORT_OF_BORDER_FRACTION` of the sheet) are moved onto it, at the nearest point of the border (a
+    vertex of it within ``merge_tolerance``, else a new one that splits its piece), with a warning naming them when
+    the gap was beyond the merge tolerance.
 
     Drawn "to the edge" by eye, a crease often stops a few tenths of a millimetre short. Left there, it ended inside
     the paper at both ends and could not fold without stretching it: the verdict said the pattern "does not fold as
@@ -1360,8 +1362,6 @@ def _join_near_misses(
     sheet, 0.3 mm: strain 0.25 % instead of 0.15 %, fold-angle error 9° instead of 4.4°), silently."""
     assign = pieces.assignment[attrs]
     which, sides = _loose_ends(edges, assign, len(verts))
-    crease_end = np.isin(assign[which], ["M", "V", "U"])  # a cut's gap is a bridge of paper: kept as drawn
-    which, sides = which[crease_end], sides[crease_end]
     if not len(which):
         return verts, edges, attrs
     outline = np.unique(edges[assign == "B"]) if (assign == "B").any() else np.unique(edges)

@@ -326,6 +326,55 @@ def test_near_miss_joins_keep_bridges_aim_at_crossings_and_close_an_x() -> None:
     assert not any("joined" in w for w in strip.warnings), strip.warnings
 
 
+def test_near_miss_joins_meet_at_crossings_and_leave_stars_drawn_short_alone() -> None:
+    """A second reviewer's cases (200 mm sheets): a valley aimed 0.05 mm beside an X and 1 mm short of it reaches
+    the crossing (by the nearest point of a neighbouring piece it landed 0.67 mm away: smallest corner 0.38° instead
+    of 3.4°); two valleys aimed at one point of a crease, each 1 mm short, meet it at one vertex (0.47 mm apart
+    before); six spokes drawn 0.6 mm short of their centre stay as drawn (joined onto each other's tips, the star
+    did not converge in 500 iterations); a 1 m × 50 mm strip turned 45° has the reach of its width, not of its
+    bounding box (all 18 cross creases ending 4 mm short of the centre line were joined)."""
+    size = 'width="200mm" height="200mm" viewBox="0 0 200 200"'
+    border = '<rect x="0" y="0" width="200" height="200" fill="none" stroke="#000"/>'
+
+    def read(body: str, sheet: str = size) -> CreasePattern:
+        return discretize(parse_svg_text(svg(body, size=sheet), "t.svg").curves)
+
+    def ray(aim: tuple[float, float], degrees: float, short: float, stroke: str) -> str:
+        d = np.array([math.cos(math.radians(degrees)), math.sin(math.radians(degrees))])
+        a, b = np.array(aim) - 120 * d, np.array(aim) - short * d
+        return f'<path d="M{a[0]!r} {a[1]!r} L{b[0]!r} {b[1]!r}" stroke="{stroke}"/>'
+
+    x = '<path d="M0 100 L200 100" stroke="#00f"/><path d="M100 0 L100 200" stroke="#f00"/>'
+    aimed = read(border + x + ray((100.0, 100.05), 45.0, 1.0, "#00f"))
+    centre = np.flatnonzero(np.all(np.isclose(aimed.vertices, [100.0, -100.0], atol=1e-9), axis=1))
+    assert len(centre) == 1 and np.bincount(aimed.edges.ravel())[centre[0]] == 5, aimed.warnings
+    two = read(
+        border
+        + '<path d="M100 0 L100 200" stroke="#f00"/>'
+        + ray((100, 100), 20, 1, "#00f")
+        + ray((100, 100), -25, 1, "#00f")
+    )
+    meet = np.flatnonzero(np.all(np.isclose(two.vertices, [100.0, -100.0], atol=1e-9), axis=1))
+    assert len(meet) == 1 and np.bincount(two.edges.ravel())[meet[0]] == 4, two.warnings
+    spokes = "".join(ray((100, 100), 60 * k + 15, 0.6, "#f00" if k % 2 else "#00f") for k in range(6))
+    star = read(border + spokes)
+    assert not any("joined" in w for w in star.warnings), star.warnings
+    assert fold_pattern(star, angle=90).report["converged"]
+    c, r = math.cos(math.radians(45)), math.sin(math.radians(45))
+
+    def turned(x0: float, y0: float) -> str:
+        return f"{x0 * c - y0 * r + 400!r} {x0 * r + y0 * c + 400!r}"
+
+    outline = f"M{turned(0, 0)} L{turned(1000, 0)} L{turned(1000, 50)} L{turned(0, 50)} Z"
+    lines = [(0, 25, 1000, 25, "#00f")] + [(x0, 0, x0, 21, "#f00") for x0 in range(50, 1000, 50)]
+    body = "".join(f'<path d="M{turned(a, b)} L{turned(u, v)}" stroke="{k}"/>' for a, b, u, v, k in lines)
+    strip = read(
+        f'<path d="{outline}" fill="none" stroke="#000"/>' + body,
+        'width="1200mm" height="1200mm" viewBox="0 0 1200 1200"',
+    )
+    assert not any("joined" in w for w in strip.warnings), strip.warnings
+
+
 # ----------------------------------------------------------------------------------------------- curves
 
 

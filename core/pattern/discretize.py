@@ -1316,10 +1316,26 @@ def _snap_short_ends(
     return mover.result()
 
 
+END_TO_END_DEG = 30.0
+"""A crease end joins the free end of another stroke of the same role and angle (one crease drawn as two strokes)
+only when the two point at each other within this angle."""
+
 NEAR_MISS_CONE_DEG = 45.0
 """A free crease end is joined to another crease only when that crease lies ahead of it: within this angle of the
 direction the end's last piece points in (a T-junction drawn short, a crease drawn as two strokes that miss), never
 beside it (a pleat ending next to its neighbour)."""
+
+
+def _sheet_width(verts: np.ndarray, edges: np.ndarray, assign: np.ndarray, size: float) -> float:
+    """The sheet's width: its outline's smaller extent along its principal axes (all vertices without a border),
+    so a strip turned 45° has the width it has drawn straight (its bounding box's smaller side was 15× more)."""
+    outline = np.unique(edges[assign == "B"]) if (assign == "B").any() else np.unique(edges)
+    p = verts[outline] - verts[outline].mean(axis=0)
+    if len(p) < 2:
+        return size
+    _, axes = np.linalg.eigh(p.T @ p)
+    width = float(np.ptp(p @ axes, axis=0).min())
+    return width if width > 0 else size
 
 
 def _crosses_any(p: np.ndarray, q: np.ndarray, pts: np.ndarray, edges: np.ndarray, vertex: int, edge: int) -> bool:
@@ -1349,13 +1365,13 @@ def _join_near_misses(
     warnings: list[str],
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Step 4 (end): a free end of a crease that stops just short of *another* stroke ahead of it (within
-    :data:`SHORT_OF_BORDER_FRACTION` of the sheet's width, its smaller extent, and :data:`NEAR_MISS_CONE_DEG` of its
-    direction) is drawn on to where it meets it (where its straight continuation hits the stroke, else the stroke's
-    nearest point; onto an end of the piece within a quarter of the gap, so an end aimed at a crossing reaches the
-    crossing), with a warning naming it; and a piece that runs from a junction a hair past it (as short, to a free
-    end, where its stroke goes on across the junction) is removed, as the part of a crease drawn past the border is.
-    Cuts are left as drawn, and are no target: the paper between a cut's end and another cut is a bridge (a
-    reviewer's kirigami sheets fell apart).
+    :data:`SHORT_OF_BORDER_FRACTION` of the sheet's width, :func:`_sheet_width`, and :data:`NEAR_MISS_CONE_DEG` of
+    its direction) is drawn on to where its straight continuation hits the stroke (onto an end of the piece within a
+    quarter of the gap, so an end aimed at a crossing reaches the crossing), or to the free end of a stroke of the
+    same role and angle that points back at it (one crease drawn as two strokes), with a warning naming it; and a
+    piece that runs from a junction a hair past it (as short, to a free end, where its stroke goes on across the
+    junction) is removed, as the part of a crease drawn past the border is. Cuts are left as drawn, and are no
+    target: the paper between a cut's end and another cut is a bridge (a reviewer's kirigami sheets fell apart).
 
     Drawn by hand with snapping off, a T-junction stops or overshoots by a few tenths of a millimetre, and a crease
     drawn as two strokes leaves a gap between them. Left so, the crease ended inside the paper (a helper's 200 mm
@@ -1364,9 +1380,7 @@ def _join_near_misses(
     which, sides = _loose_ends(edges, assign, len(verts))
     if not len(which):
         return verts, edges, attrs
-    outline = np.unique(edges[assign == "B"]) if (assign == "B").any() else np.unique(edges)
-    extent = np.ptp(verts[outline], axis=0)
-    reach = SHORT_OF_BORDER_FRACTION * float(extent.min() if extent.min() > 0 else size)  # a strip's width
+    reach = SHORT_OF_BORDER_FRACTION * _sheet_width(verts, edges, assign, size)
     degree = np.bincount(edges.ravel(), minlength=len(verts))
     length = np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T)
     junction = edges[which, 1 - sides]
@@ -1401,26 +1415,49 @@ def _join_near_misses(
     ahead = tips - backs
     ahead /= np.maximum(np.hypot(*ahead.T), 1e-300)[:, None]
 
-    def nearest_ahead(end: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """For pairs (end, piece a → b): where the end meets the piece — the crease drawn on straight ahead, where
-        it hits the piece (an end aimed at a crossing goes to the crossing), else the nearest point of the piece —
-        its distance, and whether it counts."""
+    facing_back = math.cos(math.radians(END_TO_END_DEG))
+
+    def nearest_ahead(
+        end: np.ndarray, pair: np.ndarray, attr: np.ndarray, a: np.ndarray, b: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """For pairs (end, piece ``pair`` from ``a`` to ``b`` of stroke attribute ``attr``): where the end meets the
+        piece, its distance, whether it counts, and whether it is an end-to-end join. The crease drawn on straight
+        ahead meets the piece where it hits it (an end aimed at a crossing reaches the crossing); a piece it does
+        not hit counts only at a free end of a stroke of the same role and angle that faces it back (a crease drawn
+        as two strokes) — never by its nearest point, which pulled the spokes of a star drawn short of its centre
+        onto each other's tips (a reviewer's hexagon: not converged in 500 iterations)."""
         tip, d = tips[end], ahead[end]
-        point = segment_foot(tip, a, b)
         r = b - a
         den = d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             t = ((a - tip)[:, 0] * r[:, 1] - (a - tip)[:, 1] * r[:, 0]) / den
             u = ((a - tip)[:, 0] * d[:, 1] - (a - tip)[:, 1] * d[:, 0]) / den
-        hit = (np.abs(den) > 1e-12 * np.hypot(*r.T)) & (t >= 0) & (u >= 0) & (u <= 1)
-        point = np.where(hit[:, None], tip + np.where(hit, t, 0.0)[:, None] * d, point)
+        hit = (np.abs(den) > 1e-12 * np.hypot(*r.T)) & (t >= 0) & (u >= -1e-9) & (u <= 1 + 1e-9)
+        foot = segment_foot(tip, a, b)
+        at_a = np.hypot(*(foot - a).T) <= merge_tolerance
+        at_b = ~at_a & (np.hypot(*(foot - b).T) <= merge_tolerance)
+        free_v = np.where(at_a, pair[:, 0], np.where(at_b, pair[:, 1], -1))
+        theirs = foot - np.where(at_a[:, None], b, a)  # the other stroke's direction at that end
+        theirs /= np.maximum(np.hypot(*theirs.T), 1e-300)[:, None]
+        mine = attrs[ends_w[end]]
+        same_kind = (pieces.assignment[attr] == pieces.assignment[mine]) & np.isclose(
+            pieces.fold_angle[attr], pieces.fold_angle[mine], rtol=0.0, atol=1e-9, equal_nan=True
+        )
+        free = (free_v >= 0) & (free_v < len(degree))
+        free[free] = degree[free_v[free]] == 1
+        end_to_end = ~hit & free & same_kind & (np.einsum("ij,ij->i", theirs, d) <= -facing_back)
+        point = np.where(hit[:, None], tip + np.where(hit, t, 0.0)[:, None] * d, foot)
         gap = point - tip
         dist = np.hypot(*gap.T)
         facing = np.einsum("ij,ij->i", gap, d) > cone * dist
-        return point, dist, facing & (dist > merge_tolerance * (1.0 + 1e-6)) & (dist <= reach)
+        ok = (hit | end_to_end) & facing & (dist > merge_tolerance * (1.0 + 1e-6)) & (dist <= reach)
+        return point, dist, ok, end_to_end
 
-    foot, dist, ok = nearest_ahead(near_end, verts[edges[near_edge, 0]], verts[edges[near_edge, 1]])
-    order = np.lexsort((dist[ok], near_end[ok]))
+    near_pair = edges[near_edge]
+    foot, dist, ok, by_end = nearest_ahead(
+        near_end, near_pair, attrs[near_edge], verts[near_pair[:, 0]], verts[near_pair[:, 1]]
+    )
+    order = np.lexsort((dist[ok], by_end[ok], near_end[ok]))  # per end: a hit first, the nearest
     candidate_end = near_end[ok][order]
     first = np.r_[True, candidate_end[1:] != candidate_end[:-1]] if len(candidate_end) else np.zeros(0, bool)
     split: set[int] = set()
@@ -1444,11 +1481,13 @@ def _join_near_misses(
             pairs, stroke_attrs = mover.rows(pieces_now)
             own = pieces.polyline[stroke_attrs] == pieces.polyline[attrs[w]]
             end = np.full(len(pieces_now), k)
-            f2, d2, ok2 = nearest_ahead(end, mover.points(pairs[:, 0]), mover.points(pairs[:, 1]))
+            f2, d2, ok2, e2 = nearest_ahead(
+                end, pairs, stroke_attrs, mover.points(pairs[:, 0]), mover.points(pairs[:, 1])
+            )
             ok2 &= ~own & ~np.any(pairs == tip_v, axis=1) & target_ok_now(pieces_now, stroke_attrs)
             if not ok2.any():
                 continue
-            best = int(np.flatnonzero(ok2)[np.argmin(d2[ok2])])
+            best = int(np.flatnonzero(ok2)[np.lexsort((d2[ok2], e2[ok2]))[0]])
             target, at, gap = int(pieces_now[best]), f2[best], float(d2[best])
         pts, all_e, _ = mover.current()
         if _crosses_any(backs[k], at, pts, all_e, back_v, target):
@@ -1462,6 +1501,7 @@ def _join_near_misses(
             moved_to = int(mover.edges[w, side])
             degree = np.concatenate([degree, np.zeros(max(0, moved_to + 1 - len(degree)), dtype=degree.dtype)])
             degree[moved_to] += 1 if mover.n_edges() == n_before else 3  # a new vertex: its two halves and this end
+    stub_tips = verts[edges[which[stub], sides[stub]]]
     verts, edges, attrs = mover.result()
     trimmed = which[stub]
     if len(trimmed):
@@ -1469,9 +1509,10 @@ def _join_near_misses(
         keep[trimmed] = False
         trimmed_attrs = attrs[trimmed]
         edges, attrs = edges[keep], attrs[keep]
+        where = ", ".join(f"({q[0]:.3f}, {q[1]:.3f})" for q in stub_tips[:4])
         warnings.append(
-            f"{len(trimmed)} crease piece(s) drawn a hair past a crossing (at most {reach:.2g} mm, to a free end) "
-            f"were removed, from {_describe_sources(sources, pieces.polyline[trimmed_attrs])}"
+            f"{len(trimmed)} crease piece(s) drawn a hair past a crossing (at most {reach:.2g} mm, to a free end at "
+            f"{where}) were removed, from {_describe_sources(sources, pieces.polyline[trimmed_attrs])}"
         )
     if joined:
         where = ", ".join(f"{g:.2g} mm at ({q[0]:.3f}, {q[1]:.3f})" for g, q, _ in joined[:4])

@@ -342,7 +342,8 @@ def test_near_miss_joins_meet_at_crossings_and_leave_stars_drawn_short_alone() -
     def ray(aim: tuple[float, float], degrees: float, short: float, stroke: str) -> str:
         d = np.array([math.cos(math.radians(degrees)), math.sin(math.radians(degrees))])
         a, b = np.array(aim) - 120 * d, np.array(aim) - short * d
-        return f'<path d="M{a[0]!r} {a[1]!r} L{b[0]!r} {b[1]!r}" stroke="{stroke}"/>'
+        (x0, y0), (x1, y1) = a.tolist(), b.tolist()  # Python floats: numpy 2 writes repr() as np.float64(…)
+        return f'<path d="M{x0!r} {y0!r} L{x1!r} {y1!r}" stroke="{stroke}"/>'
 
     x = '<path d="M0 100 L200 100" stroke="#00f"/><path d="M100 0 L100 200" stroke="#f00"/>'
     aimed = read(border + x + ray((100.0, 100.05), 45.0, 1.0, "#00f"))

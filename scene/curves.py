@@ -54,10 +54,8 @@ ANGLE_DECIMALS = 4
 def default_unit_scale(scene: bpy.types.Scene | None = None) -> float:
     """Blender units per millimetre in ``scene`` (the context scene by default): ``1 / (1000 × scale_length)``."""
     scene = scene or bpy.context.scene
+    # scale_length is a float32 (0.001 reads back as 0.0010000000475): a typed-in 0.001 means exactly 1 BU = 1 mm
     scale = as_typed(scene.unit_settings.scale_length) if scene is not None else 1.0
-    # scale_length is a float32 (0.001 reads back as 0.0010000000475): round to its 7 significant digits so a
-    # typed-in 0.001 means exactly 1 BU = 1 mm.
-    scale = float(f"{scale:.7g}")
     return 1.0 / (1000.0 * (scale if scale > 0.0 else 1.0))
 
 

@@ -1250,9 +1250,6 @@ class _EndMover:
         self.edges[w, side] = target
         return True
 
-    def result(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self.current()
-
 
 def _loose_ends(edges: np.ndarray, assign: np.ndarray, n_verts: int) -> tuple[np.ndarray, np.ndarray]:
     """Free ends of creases: ``(edge, side)`` index arrays of segment ends at a vertex of degree 1. Not of cuts: the
@@ -1313,7 +1310,7 @@ def _snap_short_ends(
             f"border to fold without stretching the paper. Draw creases to the border, or end them more than "
             f"{reach:.2g} mm inside"
         )
-    return mover.result()
+    return mover.current()
 
 
 END_TO_END_DEG = 30.0
@@ -1343,14 +1340,10 @@ def _crosses_any(p: np.ndarray, q: np.ndarray, pts: np.ndarray, edges: np.ndarra
     keep = ~np.any(edges == vertex, axis=1)
     keep[edge] = False
     a, b = pts[edges[keep, 0]], pts[edges[keep, 1]]
-    r = q - p
-
-    def side(u: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
-        return (v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1]) - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0])
-
-    d1, d2 = side(p, q, a), side(p, q, b)
-    d3, d4 = side(a, b, np.broadcast_to(p, a.shape)), side(a, b, np.broadcast_to(q, a.shape))
-    scale = float(np.hypot(*r)) * np.hypot(*(b - a).T) * 1e-12
+    r, s = np.broadcast_to(q - p, a.shape), b - a
+    d1, d2 = _cross(r, a - p), _cross(r, b - p)
+    d3, d4 = _cross(s, p - a), _cross(s, q - a)
+    scale = float(np.hypot(*(q - p))) * np.hypot(*s.T) * 1e-12
     return bool(np.any((d1 * d2 < -(scale**2)) & (d3 * d4 < -(scale**2))))
 
 
@@ -1395,8 +1388,11 @@ def _join_near_misses(
     cone = math.cos(math.radians(NEAR_MISS_CONE_DEG))
     ends_w, ends_side = which[~stub], sides[~stub]
     # the strokes near each end (bounding boxes within reach, from the grid): the work grows with the near pairs
-    n_e, tip = len(edges), verts[edges[ends_w, ends_side]]
-    i, j = _candidate_pairs(np.concatenate([verts[edges[:, 0]], tip]), np.concatenate([verts[edges[:, 1]], tip]), reach)
+    n_e = len(edges)
+    tips, backs = verts[edges[ends_w, ends_side]], verts[edges[ends_w, 1 - ends_side]]
+    i, j = _candidate_pairs(
+        np.concatenate([verts[edges[:, 0]], tips]), np.concatenate([verts[edges[:, 1]], tips]), reach
+    )
     near = (i < n_e) & (j >= n_e)
     near_edge, near_end = i[near], j[near] - n_e
     order = np.argsort(near_end, kind="stable")
@@ -1411,7 +1407,6 @@ def _join_near_misses(
         & ~np.any(edges[near_edge] == edges[ends_w[near_end], ends_side[near_end]][:, None], axis=1)
     )
     near_edge, near_end = near_edge[keep], near_end[keep]
-    tips, backs = verts[edges[ends_w, ends_side]], verts[edges[ends_w, 1 - ends_side]]
     ahead = tips - backs
     ahead /= np.maximum(np.hypot(*ahead.T), 1e-300)[:, None]
 
@@ -1428,10 +1423,10 @@ def _join_near_misses(
         onto each other's tips (a reviewer's hexagon: not converged in 500 iterations)."""
         tip, d = tips[end], ahead[end]
         r = b - a
-        den = d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0]
+        den = _cross(d, r)
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = ((a - tip)[:, 0] * r[:, 1] - (a - tip)[:, 1] * r[:, 0]) / den
-            u = ((a - tip)[:, 0] * d[:, 1] - (a - tip)[:, 1] * d[:, 0]) / den
+            t = _cross(a - tip, r) / den
+            u = _cross(a - tip, d) / den
         hit = (np.abs(den) > 1e-12 * np.hypot(*r.T)) & (t >= 0) & (u >= -1e-9) & (u <= 1 + 1e-9)
         foot = segment_foot(tip, a, b)
         at_a = np.hypot(*(foot - a).T) <= merge_tolerance
@@ -1502,7 +1497,7 @@ def _join_near_misses(
             degree = np.concatenate([degree, np.zeros(max(0, moved_to + 1 - len(degree)), dtype=degree.dtype)])
             degree[moved_to] += 1 if mover.n_edges() == n_before else 3  # a new vertex: its two halves and this end
     stub_tips = verts[edges[which[stub], sides[stub]]]
-    verts, edges, attrs = mover.result()
+    verts, edges, attrs = mover.current()
     trimmed = which[stub]
     if len(trimmed):
         keep = np.ones(len(edges), dtype=bool)

@@ -6,6 +6,7 @@ import itertools
 import math
 import time
 from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -458,7 +459,9 @@ def test_curve_samples_a_hair_from_a_junction_are_removed_within_tolerance(monke
     monkeypatch.setattr(disc, "JUNCTION_SLIVER_FRACTION", 0.0)
     plain = disc.discretize(curves)
     assert fixed.n_vertices < plain.n_vertices
-    assert forced_smallest_corner(plain) < 0.5 < 1.1 < forced_smallest_corner(fixed)
+    # straight creases whole (an infinite interval): the needle split (core.mesh.needles) would hide the difference
+    whole = [replace(p, interval=math.inf) for p in (plain, fixed)]
+    assert forced_smallest_corner(whole[0]) < 0.5 < 1.1 < forced_smallest_corner(whole[1])
     _, tolerance, _ = disc.default_parameters(150.0)
     kept = {tuple(v) for v in fixed.vertices.round(9).tolist()}
     gone = np.array([v for v in plain.vertices.round(9).tolist() if tuple(v) not in kept])

@@ -739,23 +739,6 @@ def test_a_tiny_flap_on_a_big_sheet_is_said_to_be_meshed_thinly() -> None:
     )
 
 
-def test_slivers_along_long_straight_creases_are_not_blamed_on_the_interval() -> None:
-    """A helper's 24 straight 200 mm pleats crossed at shallow angles by two sine creases
-    (``tests/data/sine_across_pleats.svg``): straight creases are not split, so the sines' fine chords fan to the
-    pleats' far ends in needles 150 mm long. Where such a crease is named as not folding, the hint says so; it used to
-    suggest a smaller interval, which only multiplies the needles there (corners under 1°: 43, then 557 at 2 mm and
-    1,242 at 1 mm). The verdict is judged here on the flat sheet, where no crease folds."""
-    from curved_fold.core.mesh.build import build_mesh
-    from curved_fold.core.metrics.verdict import verdict
-
-    mesh = build_mesh(read_pattern(REPO / "tests" / "data" / "sine_across_pleats.svg"))
-    message = verdict(mesh, np.zeros(len(mesh.edges)), 1.0)["does_not_fold_message"]
-    sine = r"<path id='m27'> \(line \d+\): [^;]*; its triangles have corners down to 0\.\d+°, reaching along long"
-    assert re.search(sine + r" straight creases \(they are not split, so a smaller interval does not help", message)
-    assert "a smaller interval may mesh it better" not in message
-    assert re.search(r"<line id='m2'> \(line \d+\): [^;]*mm(; SVG|; and \d+ more|$)", message), message  # no hint
-
-
 def test_dangling_crease_does_not_fold_as_assigned() -> None:
     """A crease ending inside the paper cannot reach its angle (non-foldable vertex): flagged, not exploded."""
     p = pattern_of(BORDER + '<path id="c" d="M50 20 L50 80" stroke="#f00"/>')

@@ -24,6 +24,7 @@ from .. import run_to_end
 from ..pattern.model import CreasePattern
 from .earcut import ear_clip
 from .fold_mesh import FoldMesh
+from .needles import split_needle_creases_steps
 from .ruling import ruling_swaps_steps
 from .triangulate import (
     _outer_first,
@@ -155,7 +156,10 @@ def _warn_separate_pieces(verts: np.ndarray, tris: np.ndarray, warnings: list[st
 def _build_mesh_steps(
     pattern: CreasePattern, mesh_type: str, backend: str, clock: _WorkClock
 ) -> Generator[str, None, FoldMesh]:
-    pt = constrained_triangulation(pattern, backend)
+    if mesh_type == "earcut":  # Origami Simulator's mesh: its straight creases stay whole
+        pt = constrained_triangulation(pattern, backend)
+    else:
+        pattern, pt = yield from split_needle_creases_steps(pattern, backend)
     if len(pt.outline_edges):  # no border drawn: the outer boundary of the drawn segments is the border
         assignments = pattern.assignments.copy()
         assignments[pt.outline_edges] = "B"

@@ -1,8 +1,9 @@
 """Constrained Delaunay triangulation of a crease pattern, without interior (Steiner) points (paper §3.2).
 
-Every crease and border segment becomes a triangle edge; the only vertices are the pattern's own. The paper uses
-CDT instead of ear clipping because Delaunay triangles are "fatter": fewer long fans meeting at one vertex, which
-would act as cone rulings.
+Every crease and border segment becomes a triangle edge; the only vertices are the pattern's own (the mesh stage
+first puts vertices on long straight creases that would fan needles, :mod:`.needles`, and triangulates that
+pattern). The paper uses CDT instead of ear clipping because Delaunay triangles are "fatter": fewer long fans
+meeting at one vertex, which would act as cone rulings.
 
 Pipeline (:func:`constrained_triangulation`):
 

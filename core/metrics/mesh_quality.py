@@ -5,7 +5,8 @@ stalls of issue 12 came with corners down to 0.04°. Some small corners are forc
 meeting at 1°, a 0.17 mm facet beside a 76 mm crease), so a mesh is judged against the pattern's own bound:
 
 * :func:`forced_smallest_corner`: the smallest corner *any* triangulation of the pattern's segments (with no added
-  vertices) must have. The constrained Delaunay triangulation maximises the smallest angle over all constrained
+  vertices but those the triangulation stage puts on long straight creases beside needles, :mod:`..mesh.needles`)
+  must have. The constrained Delaunay triangulation maximises the smallest angle over all constrained
   triangulations of the same vertices and segments (Lee & Lin 1986), so the bound is the CDT's smallest corner over
   the paper's triangles, exactly;
 * :func:`smallest_segment_gap`: the smallest angle between two segments meeting at a vertex, a corner no
@@ -19,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh, corner_angles
-from ..mesh.triangulate import constrained_triangulation
+from ..mesh.needles import split_needle_creases
 from ..pattern.model import CreasePattern
 
 SLIVER_DEG = 1.0
@@ -27,9 +28,10 @@ SLIVER_DEG = 1.0
 
 
 def forced_smallest_corner(pattern: CreasePattern, backend: str = "auto") -> float:
-    """The smallest corner (degrees) every triangulation of ``pattern``'s segments without added vertices has: the
-    constrained Delaunay triangulation's smallest corner over the paper (see the module docstring)."""
-    pt = constrained_triangulation(pattern, backend)
+    """The smallest corner (degrees) every triangulation of ``pattern``'s segments, as the triangulation stage splits
+    them, without added vertices has: the constrained Delaunay triangulation's smallest corner over the paper (see
+    the module docstring)."""
+    pt = split_needle_creases(pattern, backend)[1]
     return float(corner_angles(pt.vertices, pt.triangles).min())
 
 

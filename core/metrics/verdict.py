@@ -106,12 +106,11 @@ def creases_not_folding(mesh: FoldMesh, fold_angles: np.ndarray, percent: float)
     mean_target = np.bincount(inv, weights=length * pcs["target"], minlength=len(ids)) / np.maximum(total, 1e-300)
     bad = (flat_len + wrong_len) > NOT_FOLDING_SHARE * total
     mid = mesh.vertices[mesh.edges[pcs["edge"]]].mean(axis=1)
-    beside, sharp_tri = _smallest_corner_beside(mesh, pcs["edge"])
+    beside = _smallest_corner_beside(mesh, pcs["edge"])
     out = []
     for k in np.flatnonzero(bad).tolist():
         pieces = (inv == k) & (pcs["flat"] | pcs["wrong_way"])
-        sharpest = np.flatnonzero(pieces)[np.argmin(beside[pieces])]
-        corner = float(beside[sharpest])
+        corner = float(beside[pieces].min())
         centre = np.average(mid[pieces], axis=0, weights=length[pieces])
         at = mid[pieces][np.argmin(np.linalg.norm(mid[pieces] - centre, axis=1))]  # a point on the crease itself
         p = int(ids[k])
@@ -127,45 +126,26 @@ def creases_not_folding(mesh: FoldMesh, fold_angles: np.ndarray, percent: float)
                 "target_deg": float(mean_target[k]),
                 "at_mm": [float(at[0]), float(at[1])],
                 "smallest_corner_deg": corner,
-                "sliver_beside_straight": _beside_long_straight(mesh, int(sharp_tri[sharpest]), length[inv == k]),
             }
         )
     out.sort(key=lambda c: -(c["flat_mm"] + c["wrong_way_mm"]))
     return out
 
 
-def _beside_long_straight(mesh: FoldMesh, triangle: int, chords: np.ndarray) -> bool:
-    """Whether ``triangle`` (a sliver beside a crease of chords ``chords``) has a corner on a drawn straight crease
-    (not the border: it is split at the interval) :data:`LONG_SLIVER_FACTOR` times the crease's median chord or
-    longer: the sliver reaches along it, and a smaller interval does not split it."""
-    if triangle < 0 or not len(chords):
-        return False
-    at = np.isin(mesh.edges, mesh.triangles[triangle]).any(axis=1)
-    straight = (mesh.edge_polyline >= 0) & ~mesh.edge_from_curve & np.isin(mesh.assignments, ("M", "V", "F", "U"))
-    p = mesh.vertices[mesh.edges[at & straight]]
-    return bool(np.any(np.linalg.norm(p[:, 1] - p[:, 0], axis=1) >= LONG_SLIVER_FACTOR * float(np.median(chords))))
-
-
-def _smallest_corner_beside(mesh: FoldMesh, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per mesh edge in ``edges``, the smallest flat corner (degrees) of the triangles on either side of it, and the
-    triangle that has it (-1 where there is none)."""
+def _smallest_corner_beside(mesh: FoldMesh, edges: np.ndarray) -> np.ndarray:
+    """Per mesh edge in ``edges``, the smallest flat corner (degrees) of the triangles on either side of it."""
     tri = np.asarray(mesh.triangles, dtype=np.int64)
     if len(tri) == 0:
-        return np.full(len(edges), np.inf), np.full(len(edges), -1)
+        return np.full(len(edges), np.inf)
     n = max(mesh.n_vertices, 1)
     sides = polygon_sides(tri)
     keys, at = np.unique(sides[:, 0] * n + sides[:, 1], return_inverse=True)
-    at = at.reshape(-1)
-    corner = np.repeat(corner_angles(mesh.vertices, tri).min(axis=1), 3)
-    order = np.lexsort((corner, at))  # per side, its triangles by corner: the first is the sharper
-    first = order[np.r_[True, at[order][1:] != at[order][:-1]]]
-    per_key, tri_key = np.full(len(keys), np.inf), np.full(len(keys), -1)
-    per_key[at[first]], tri_key[at[first]] = corner[first], first // 3
+    per_key = np.full(len(keys), np.inf)
+    np.minimum.at(per_key, at.reshape(-1), np.repeat(corner_angles(mesh.vertices, tri).min(axis=1), 3))
     pair = np.sort(mesh.edges[edges], axis=1)
     key = pair[:, 0] * n + pair[:, 1]
     where = np.clip(np.searchsorted(keys, key), 0, len(keys) - 1)
-    found = keys[where] == key
-    return np.where(found, per_key[where], np.inf), np.where(found, tri_key[where], -1)
+    return np.where(keys[where] == key, per_key[where], np.inf)
 
 
 def isolated_creases(mesh: FoldMesh) -> list[dict[str, Any]]:
@@ -219,13 +199,6 @@ def isolated_creases(mesh: FoldMesh) -> list[dict[str, Any]]:
     return out
 
 
-LONG_SLIVER_FACTOR = 4.0
-"""A sliver beside a crease with a corner on a straight crease this many times the crease's median chord or longer
-reaches along it (straight creases are not split at the interval): the verdict's hint says so instead of suggesting
-a smaller interval, which only adds needles there (a helper's sine creases across 200 mm pleats: corners under 1°
-43 → 557 → 1,242 at the default interval, 2 and 1 mm)."""
-
-
 def _describe(c: dict[str, Any], percent: float) -> str:
     how = []
     if c["wrong_way_mm"] > 0:
@@ -235,13 +208,7 @@ def _describe(c: dict[str, Any], percent: float) -> str:
     hint = ""
     if c.get("smallest_corner_deg", math.inf) < SLIVER_DEG:  # no room to fold: a mesh matter, not the design's
         corner = c["smallest_corner_deg"]
-        if c.get("sliver_beside_straight"):  # reaching along a long straight crease
-            hint = (
-                f"; its triangles have corners down to {corner:.2f}°, reaching along long straight creases (they are "
-                "not split, so a smaller interval does not help; points drawn along them do)"
-            )
-        else:
-            hint = f"; its triangles have corners down to {corner:.2f}° (a smaller interval may mesh it better)"
+        hint = f"; its triangles have corners down to {corner:.2f}° (a smaller interval may mesh it better)"
     return (
         f"{c['crease']}: of its {c['length_mm']:.1f} mm, {' and '.join(how)} (folded {c['angle_deg']:.0f}° for "
         f"{c['target_deg']:.0f}°), around ({c['at_mm'][0]:.1f}, {c['at_mm'][1]:.1f}) mm{hint}"

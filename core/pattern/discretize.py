@@ -7,8 +7,9 @@ Steps, in order:
    midpoint is inserted wherever its distance from the chord exceeds ``tolerance``, repeatedly, until none is
    left. Each segment is refined on its own, vectorised over its chords.
 2. **Straight segments.** Straight *border* segments are split into ⌈length / interval⌉ equal pieces so the
-   triangulation has border vertices to attach rulings to; straight creases are kept whole. Polyline input keeps
-   its drawn vertices, except where it is sampled far finer than the interval (step 6).
+   triangulation has border vertices to attach rulings to; straight creases are kept whole here (the
+   triangulation splits those that would fan needles, :mod:`..mesh.needles`, at the pattern's ``interval``).
+   Polyline input keeps its drawn vertices, except where it is sampled far finer than the interval (step 6).
 3. **Planar arrangement.** Vertices closer than ``merge_tolerance`` are merged (into the first representative, as
    Origami Simulator does; border vertices come first so the outline never moves); crossing segments (X) and
    endpoints lying on another segment (T) are split at the intersection (a computed crossing within
@@ -535,19 +536,32 @@ def subdivide_straight_border(pattern: CreasePattern, interval: float | None = N
     another tool usually draws a rectangular sheet as four long edges, and without border vertices to attach
     rulings to, the triangulation fans slivers into the corners (a sine-pleat strip: smallest corner 0.06° instead
     of 8.2°, mean fold-angle error 14.9° instead of 2.2°). ``interval`` defaults to the paper's, scaled to the
-    sheet (:func:`default_parameters` of the border's largest extent). Edges already short enough are unchanged."""
-    straight = (pattern.assignments == "B") & ~pattern.edge_from_curve
-    if not straight.any():
+    sheet (:func:`pattern_interval`). Edges already short enough are unchanged."""
+    return subdivide_edges(pattern, (pattern.assignments == "B") & ~pattern.edge_from_curve, interval)
+
+
+def pattern_interval(pattern: CreasePattern) -> float:
+    """The interval ``pattern`` was discretised at, or for a pattern read as segments (``interval`` nan) the
+    paper's, scaled to its sheet (:func:`default_parameters` of the border's largest extent)."""
+    if not math.isnan(pattern.interval):
+        return pattern.interval
+    return default_parameters(_pattern_sheet_size(pattern))[0]
+
+
+def subdivide_edges(pattern: CreasePattern, which: np.ndarray, interval: float | None = None) -> CreasePattern:
+    """``pattern`` with the straight edges ``which`` (bool mask) split into ⌈length / interval⌉ equal pieces; edge
+    k's first piece stays edge k (messages name a file's edges by index), the other pieces come after. ``interval``
+    defaults to :func:`pattern_interval`. Edges already short enough are unchanged."""
+    if not which.any():
         return pattern
     if interval is None:
-        interval = default_parameters(_pattern_sheet_size(pattern))[0]
+        interval = pattern_interval(pattern)
     if not (interval > 0 and math.isfinite(interval)):  # a border of one point: nothing to split
         return pattern
     m = len(pattern.edges)
-    verts, edges, attrs = _subdivide_border(pattern.vertices, pattern.edges, np.arange(m), straight, interval)
+    verts, edges, attrs = _subdivide_border(pattern.vertices, pattern.edges, np.arange(m), which, interval)
     if len(edges) == m:
         return pattern
-    # edge k's first piece stays edge k (messages name a file's edges by index), the other pieces come after
     first = np.r_[True, attrs[1:] != attrs[:-1]]
     order = np.r_[np.flatnonzero(first), np.flatnonzero(~first)]
     edges, attrs = edges[order], attrs[order]
@@ -1602,6 +1616,7 @@ def discretize_steps(
         edge_from_curve=from_curve,
         sources=sources,
         warnings=warnings,
+        interval=interval,
     )
     pattern.validate()
     return pattern

@@ -19,6 +19,7 @@ Conventions used everywhere in the project:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -139,7 +140,10 @@ class CreasePattern:
     * ``edge_from_curve`` ``(m,)`` bool: the segment discretises a curve (used by the ruling-aware swaps)
 
     ``sources`` describes each polyline (see :attr:`CreaseCurve.source`); ``warnings`` collects non-fatal
-    problems met on the way (unknown SVG colours, capped tolerances, ...).
+    problems met on the way (unknown SVG colours, capped tolerances, ...). ``interval`` is the discretisation interval
+    (mm) a drawing was sampled at, nan for a pattern read as segments (a FOLD file, then the paper's default for its
+    sheet applies): the triangulation splits long straight creases at it where they would fan needles
+    (:mod:`..mesh.needles`); at an infinite interval it keeps every crease whole.
     """
 
     vertices: np.ndarray
@@ -150,6 +154,7 @@ class CreasePattern:
     edge_from_curve: np.ndarray
     sources: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    interval: float = math.nan
 
     def __post_init__(self) -> None:
         self.vertices = np.asarray(self.vertices, dtype=np.float64).reshape(-1, 2)

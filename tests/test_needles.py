@@ -1,0 +1,113 @@
+"""Long straight creases split where the triangulation would fan needles off them (``core/mesh/needles.py``).
+
+Two drawings by helper sessions (thirteenth pass), both with the needles before this split:
+``tests/data/sine_across_pleats.svg`` (24 straight 200 mm pleats crossed at shallow angles by two sine creases: 43
+corners under 1°, down to 0.03°, 159 iterations to the round-off floor at 100 %) and
+``tests/data/strip_stopping_short.svg`` (a 1,000 × 50 mm strip with short cross creases stopping 4 mm from its centre
+valley: not converged in 500 iterations, residual 1.6).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from curved_fold.core.io.reader import read_pattern
+from curved_fold.core.mesh.build import build_mesh
+from curved_fold.core.mesh.fold_mesh import corner_angles
+from curved_fold.core.mesh.needles import NEEDLE_DEG, split_needle_creases
+from curved_fold.core.mesh.triangulate import constrained_triangulation
+from curved_fold.core.pattern.discretize import default_parameters
+from curved_fold.core.pipeline import fold_pattern
+
+DATA = Path(__file__).resolve().parent / "data"
+FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
+
+
+@pytest.fixture(scope="module")
+def sine() -> object:
+    return read_pattern(DATA / "sine_across_pleats.svg")
+
+
+def _corners(mesh) -> np.ndarray:
+    return corner_angles(mesh.vertices, mesh.triangles)
+
+
+def test_needles_beside_long_straight_creases_are_gone(sine) -> None:
+    """Whole, the pleats fan 43 corners under 1° (down to 0.03°); split where they bound a needle, none is left, and
+    the pieces are the pleats themselves: each lies on its drawn line, keeps its stroke, role and fold angle, and
+    is no longer than the interval."""
+    whole = _corners(build_mesh(replace(sine, interval=math.inf)))
+    assert whole.min() < 0.05 and np.count_nonzero(whole < NEEDLE_DEG) >= 40
+    split, _ = split_needle_creases(sine)
+    mesh = build_mesh(sine)
+    assert _corners(mesh).min() >= NEEDLE_DEG
+    added = split.n_edges - sine.n_edges
+    assert added > 100
+    # edge k's first piece stays edge k; the new pieces follow, each on a straight crease of its own stroke
+    v, v0 = split.vertices, sine.vertices
+    for k in range(sine.n_edges, split.n_edges):
+        assert split.assignments[k] in ("M", "V") and not split.edge_from_curve[k]
+        a, b = v[split.edges[k]]
+        assert np.linalg.norm(b - a) <= sine.interval * (1 + 1e-9)
+        mine = np.flatnonzero((sine.edge_polyline == split.edge_polyline[k]) & ~sine.edge_from_curve)
+        p, q = v0[sine.edges[mine, 0]], v0[sine.edges[mine, 1]]
+        d = q - p
+        off = [np.abs(d[:, 0] * (x[1] - p[:, 1]) - d[:, 1] * (x[0] - p[:, 0])) / np.hypot(*d.T) for x in (a, b)]
+        along = [((x - p) * d).sum(axis=1) / (d * d).sum(axis=1) for x in (a, b)]
+        on = (off[0] < 1e-9) & (off[1] < 1e-9)
+        on &= (along[0] > -1e-12) & (along[0] < 1 + 1e-12) & (along[1] > -1e-12) & (along[1] < 1 + 1e-12)
+        assert on.any(), f"piece {k} lies on no straight crease of its stroke"
+    same = np.array([split.edge_polyline[k] == sine.edge_polyline[k] for k in range(sine.n_edges)])
+    assert same.all() and np.array_equal(split.fold_angles[: sine.n_edges], sine.fold_angles, equal_nan=True)
+
+
+def test_the_split_folds_the_sine_across_pleats_quickly(sine) -> None:
+    """At 100 %: 159 iterations to the round-off floor with the needles; split, a converged minimum in a few tens."""
+    report = fold_pattern(sine, percent=1.0).report
+    assert report["converged"] and not report["converged_to_round_off"], report["message"]
+    assert report["negative_pivots"] == 0 and report["iterations"] <= 40
+
+
+@pytest.mark.parametrize("percent", [0.6, 1.0])
+def test_a_strip_with_creases_stopping_short_of_its_centre_folds(percent: float) -> None:
+    """The 1,000 mm valley was one segment; the short mountains' free ends 4 mm beside it fanned needles 500 mm
+    long (corners 0.09°), and the fold stopped at 500 iterations, residual 1.6. Split, it converges."""
+    pattern = read_pattern(DATA / "strip_stopping_short.svg")
+    whole = _corners(build_mesh(replace(pattern, interval=math.inf)))
+    run = fold_pattern(pattern, percent=percent)
+    assert whole.min() < 0.5 and _corners(run.mesh).min() > 1.0
+    assert run.report["converged"] and run.report["negative_pivots"] == 0, run.report["message"]
+    assert run.report["iterations"] <= 60
+
+
+def test_patterns_without_needles_are_left_as_drawn() -> None:
+    """No needle, no split: the same pattern object and the plain constrained triangulation (every fixture but
+    huffmanTower; its mesh digests were re-recorded for the split)."""
+    for name in ("CircularPleat-antiFacet", "Carved_Cylinder", "miura-ori", "curvedPleatSimple", "shell14"):
+        pattern = read_pattern(FIXTURES / f"{name}.svg")
+        split, pt = split_needle_creases(pattern)
+        assert split is pattern, name
+        assert np.array_equal(pt.triangles, constrained_triangulation(pattern).triangles), name
+    huffman = read_pattern(FIXTURES / "huffmanTower.svg")
+    assert split_needle_creases(huffman)[0].n_edges > huffman.n_edges
+
+
+def test_the_earcut_baseline_keeps_straight_creases_whole(sine) -> None:
+    """Origami Simulator's own mesh (the ``earcut`` baseline) has no such split: its vertices are the pattern's."""
+    mesh = build_mesh(sine, "earcut")
+    assert mesh.n_vertices == sine.n_vertices and _corners(mesh).min() < 0.1
+
+
+def test_a_pattern_read_as_segments_is_split_at_its_sheets_default_interval(sine) -> None:
+    """A FOLD file's pattern has no interval of its own (nan): the paper's, scaled to the sheet, applies; an infinite
+    one keeps every crease whole."""
+    assert sine.interval == default_parameters(200.0)[0]  # the drawing was sampled at the default
+    split, _ = split_needle_creases(replace(sine, interval=math.nan))
+    assert split.n_edges > sine.n_edges
+    assert np.array_equal(split.vertices, split_needle_creases(sine)[0].vertices)
+    assert split_needle_creases(replace(sine, interval=math.inf))[0].n_edges == sine.n_edges

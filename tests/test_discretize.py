@@ -625,3 +625,29 @@ def test_inside_border_in_bands_counts_as_every_point_against_every_segment() ->
         pts[: min(50, len(pts))] = poly[rng.integers(0, n, min(50, len(pts)))]
         a, b = poly, np.roll(poly, -1, axis=0)
         np.testing.assert_array_equal(_inside_border(pts, a, b), every_pair(pts, a, b), err_msg=str(trial))
+
+
+def test_an_end_moved_onto_the_border_does_not_double_it() -> None:
+    """The fuzz run (seed 3, 2,000 patterns, nine of them) found a crease that enters the sheet across its edge and
+    ends 0.68 mm inside it, running at 8° to that edge: its free end is moved onto the border (the nearest point), so
+    its last piece lay along the border piece between the crossing and that point, two segments on the same two
+    vertices, and the triangulation refused the pattern ("pattern edges 88 and 89 join the same two vertices"). The
+    piece is the border's: it is kept once, as border, with the duplicates' warning, and the sheet folds."""
+    from curved_fold.core.pipeline import fold_pattern
+
+    border = CreaseCurve(
+        [line((0, 0), (150, 0)), line((150, 0), (150, 150)), line((150, 150), (0, 150)), line((0, 150), (0, 0))],
+        "B",
+        None,
+        closed=True,
+        source="border",
+    )
+    valley = CreaseCurve([line((10, 40), (140, 40))], "V", 90.0, source="valley")
+    slant = CreaseCurve([line((-15.0, -15.0), (0.679966694023669, 96.39640602312231))], "M", -90.0, source="slant")
+    pattern = discretize([border, valley, slant])
+    key = np.sort(pattern.edges, axis=1)
+    assert len(np.unique(key, axis=0)) == len(key)
+    assert any("stopped short of the border" in w for w in pattern.warnings)
+    assert any("kept border (B) over slant (M)" in w for w in pattern.warnings), pattern.warnings
+    report = fold_pattern(pattern, percent=1.0).report
+    assert report["converged"], report["message"]

@@ -1577,6 +1577,8 @@ def discretize_steps(
     size = sheet_size(curves)
     verts, edges, attrs = _clip_to_border(verts, edges, attrs, pieces, sources, size, merge_tolerance, warnings)
     verts, edges, attrs = _join_near_misses(verts, edges, attrs, pieces, sources, size, merge_tolerance, warnings)
+    # an end moved onto the border, or onto another stroke, can lay its last piece along a piece already there
+    edges, attrs = _remove_duplicates(edges, attrs, pieces, sources, warnings)
     yield "clipped to the border"
     edges, attrs, _ = _drop_samples_beside_junctions(verts, edges, attrs, pieces, interval, tolerance)  # step 5
     # curves drawn as polylines are curves too (the ruling swaps score only curve pieces); a stroke with a Bézier or

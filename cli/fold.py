@@ -31,7 +31,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--angle", type=float, default=None, help="fold angle (deg, -180..180) for creases without one")
     p.add_argument("--percent", type=float, default=100.0, help="fold percent, 0–100 (default 100)")
-    p.add_argument("--interval", type=float, default=None, help="max chord length of discretised curves (mm)")
+    p.add_argument(
+        "--interval",
+        type=float,
+        default=None,
+        help="max chord length of discretised curves and borders, and of straight creases split beside needle "
+        "triangles (mm)",
+    )
     p.add_argument("--tolerance", type=float, default=None, help="max curve deviation of a chord (mm)")
     p.add_argument("--mesh", default="ruling", choices=("ruling", "cdt", "earcut"), help="triangulation")
     p.add_argument("--solver", default="fast", choices=("fast", "faithful", "isometric"), help="solver method")

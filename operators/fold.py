@@ -32,7 +32,7 @@ class CURVED_FOLD_OT_fold(JobOperator, bpy.types.Operator):
     )
     interval: FloatProperty(
         name="Interval",
-        description="Largest chord length (0 = automatic)",
+        description="Largest chord length of curves, borders and split straight creases (0 = automatic)",
         default=0.0,
         min=0.0,
         subtype="DISTANCE",

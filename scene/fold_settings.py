@@ -95,8 +95,8 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
     )
     interval: FloatProperty(
         name="Interval",
-        description="Largest chord length of the discretised curves and borders (0 = automatic: the paper's 7 mm "
-        "per 150 mm of sheet)",
+        description="Largest chord length of the discretised curves and borders, and of the pieces of a straight "
+        "crease split beside needle triangles (0 = automatic: the paper's 7 mm per 150 mm of sheet)",
         default=0.0,
         min=0.0,  # no soft_max: in Blender units it meant 50 mm at Unit Scale 1 but 0.05 mm at 0.001
         precision=4,

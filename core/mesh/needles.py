@@ -2,29 +2,38 @@
 
 The paper's triangulation adds no interior points, and §3.1 samples only curves: a straight crease stays one
 segment from junction to junction, however long. Where a curve runs close to such a crease (a sine crossing
-straight pleats at a shallow angle, a curve ending just beside a long valley), the constrained Delaunay
-triangulation has no vertex on the crease to connect the curve's samples to but its far end points, and fans
-needles 100 mm long with corners of 0.03° (``tests/data/sine_across_pleats.svg``), the triangles the solver squashes
-flat. They are not forced by the drawing: with vertices along the crease the same drawing meshes with corners no
-smaller than the angles its creases meet at.
+straight pleats at a shallow angle) or a crease stops just beside it, the constrained Delaunay triangulation has no
+vertex on the crease to connect to but its far end points, and fans needles 100 mm long with corners of 0.03°
+(``tests/data/sine_across_pleats.svg``), the triangles the solver squashes flat. They are not forced by the drawing:
+with vertices along the crease the same drawing meshes with far larger corners.
 
-So, as the border is (§3.1), a straight crease is split into ⌈length / interval⌉ equal pieces, but only where it
-bounds a needle's corner (:func:`needle_creases`): elsewhere (every fixture but ``huffmanTower``) the mesh is the
-paper's, vertex for vertex. Splitting every straight crease was measured and not kept: the extra
-vertices score in no ruling estimate, and the mean warp rose on patterns that had no needle (``huffmanTower`` 2.7°
-→ 11.1°, docs/meshes.md). The new vertices lie on the crease, so its pieces fold as one crease and the sheet keeps
-its outline; the triangulation is then made again, until no crease is split (:data:`MAX_ROUNDS`).
+So, as the border is (§3.1), such a crease is split into ⌈length / interval⌉ equal pieces (:func:`needle_creases`):
+
+* a **needle** is a triangle with a corner under :data:`NEEDLE_DEG` that is not the angle between two segments (that
+  one is the drawing's own), in a face whose paper bends: a curve piece on its boundary or a crease ending inside it
+  (:func:`_bending_faces`). A face of straight creases alone folds as a flat panel, and its needles fold with it
+  (parallel pleats 2 mm apart on a 1 m sheet: strips of two 0.1° triangles, folded exactly);
+* the creases split are the long straight creases bounding the needle's corner, and those parallel to them across
+  the faces beside them (:func:`_across_strips`: a strip split on one side only fans from the other side's ends);
+* the pattern is then triangulated again, until no crease is split (:data:`MAX_ROUNDS`), within the
+  discretisation's segment budget (:func:`_within_budget`).
+
+Elsewhere (every fixture but ``huffmanTower``) the mesh is the paper's, vertex for vertex. Splitting every straight
+crease was measured and not kept: the extra vertices score in no ruling estimate, and the mean warp rose on patterns
+that had no needle (``huffmanTower`` 2.7° → 11.1°, docs/meshes.md). The new vertices lie on the crease, so its
+pieces fold as one crease and the sheet keeps its outline.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Generator
+from dataclasses import replace
 
 import numpy as np
 
 from .. import run_to_end
-from ..pattern.discretize import pattern_interval, subdivide_edges
+from ..pattern.discretize import MAX_SEGMENTS, pattern_interval, subdivide_edges
 from ..pattern.model import CreasePattern
 from .fold_mesh import corner_angles
 from .triangulate import PlanarTriangulation, constrained_triangulation
@@ -33,11 +42,13 @@ NEEDLE_DEG = 1.0
 """A triangle with a corner under this is a needle (the corners the quality metrics count as slivers,
 ``metrics.mesh_quality.SLIVER_DEG``)."""
 
+STRIP_DEG = 10.0
+"""Creases on one face within this angle of parallel to a split one are split with it (:func:`_across_strips`)."""
+
 MAX_ROUNDS = 64
-"""Triangulations made at most: the first, and one after each round of splits. A split can leave a needle beside
-the next crease (24 parallel pleats, the middle ones split first, fan to their neighbours' ends), so rounds go on
-while some crease is split; each round splits at least one crease, so they end, and the drawings measured needed
-one to three."""
+"""Triangulations made at most: the first, and one after each round of splits (each splits at least one crease).
+With the splits carried across strips, every drawing measured needed one round; a warning says when needles are
+left at the cap."""
 
 
 def needle_creases(pattern: CreasePattern, pt: PlanarTriangulation, interval: float) -> np.ndarray:
@@ -67,19 +78,78 @@ def needle_creases(pattern: CreasePattern, pt: PlanarTriangulation, interval: fl
     ends, ends_edge, angle = ends[order], ends_edge[order], angle[order]
     first = np.searchsorted(ends[:, 0], np.arange(len(pts)), "left")
     last = np.searchsorted(ends[:, 0], np.arange(len(pts)), "right")
+    bending = _bending_faces(pattern, pt, np.diff(np.r_[first, len(ends)]) if len(pts) else np.zeros(0, np.int64))
     for t, k in zip(t_small.tolist(), k_small.tolist(), strict=True):
+        if not bending[pt.triangle_region[t]]:
+            continue
         w, x, y = int(tris[t, k]), int(tris[t, (k + 1) % 3]), int(tris[t, (k + 2) % 3])
         if (min(w, x), max(w, x)) in pt.segment_of and (min(w, y), max(w, y)) in pt.segment_of:
             continue
-        lo, hi = first[w], last[w]
-        if lo == hi:
-            continue
+        lo, hi = first[w], last[w]  # w is on a segment: every triangulation vertex is
         mid = pts[x] + pts[y] - 2.0 * pts[w]  # the corner's bisector (CCW triangle: x then y)
         phi = np.arctan2(mid[1], mid[0])
         gap = np.mod(angle[lo:hi] - phi, 2.0 * np.pi)
         for side in (int(np.argmin(gap)), int(np.argmax(gap))):  # the first segment CCW, the first CW
             edge = int(ends_edge[lo + side])
             out[edge] |= bool(eligible[edge])
+    return _across_strips(pattern, pt, out, eligible)
+
+
+def _across_strips(
+    pattern: CreasePattern, pt: PlanarTriangulation, marked: np.ndarray, eligible: np.ndarray
+) -> np.ndarray:
+    """``marked`` grown across strips: a long straight crease on the boundary of a face beside a marked one, within
+    :data:`STRIP_DEG` of parallel to it, is marked too, and so on. Split on one side only, a strip between parallel
+    creases fans from the whole side's ends to the split side's new vertices (24 pleats 8 mm apart: corners of
+    0.45–0.89°), a needle the next round would split: one round, not one per strip (120 pleats, an arc beside the
+    first: 64 triangulations before)."""
+    if not marked.any():
+        return marked
+    v, e = pattern.vertices, pattern.edges
+    direction = v[e[:, 1]] - v[e[:, 0]]
+    direction = direction / np.maximum(np.hypot(*direction.T), 1e-300)[:, None]
+    cos_max = math.cos(math.radians(STRIP_DEG))
+    faces_of: dict[int, set[int]] = {}
+    edges_of: list[list[int]] = []
+    for f, loops in enumerate(pt.face_loops):
+        on_face: list[int] = []
+        for loop in loops:
+            ring = loop.tolist()
+            for a, b in zip(ring, ring[1:] + ring[:1], strict=True):
+                edge = pt.segment_of.get((min(a, b), max(a, b)))
+                if edge is not None and eligible[edge]:
+                    on_face.append(edge)
+                    faces_of.setdefault(edge, set()).add(f)
+        edges_of.append(on_face)
+    out = marked.copy()
+    queue = np.flatnonzero(marked).tolist()
+    while queue:
+        k = queue.pop()
+        for f in faces_of.get(k, ()):
+            for other in edges_of[f]:
+                if not out[other] and abs(float(direction[k] @ direction[other])) >= cos_max:
+                    out[other] = True
+                    queue.append(other)
+    return out
+
+
+def _bending_faces(pattern: CreasePattern, pt: PlanarTriangulation, degree: np.ndarray) -> np.ndarray:
+    """Per crease-pattern face of ``pt``, whether its paper bends: a curve piece on its boundary, or a crease that
+    ends inside it (a vertex with one segment, ``degree`` per triangulation vertex). A face bounded by straight
+    creases alone folds as a flat panel, and a needle in it stays flat with it (150 parallel pleats 2 mm apart on a
+    1 m sheet: strips of two 0.1° triangles, folded exactly)."""
+    n_faces = int(pt.triangle_region.max()) + 1 if len(pt.triangle_region) else 0
+    out = np.zeros(n_faces, dtype=bool)
+    tris = pt.triangles
+    n = np.int64(max(len(pt.vertices), 1))
+    curve = [i * n + j for (i, j), k in pt.segment_of.items() if pattern.edge_from_curve[k]]
+    if curve:
+        sides = np.sort(np.stack([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]], axis=1), axis=2)
+        on_curve = np.isin(sides[..., 0] * n + sides[..., 1], np.asarray(curve, dtype=np.int64)).any(axis=1)
+        out[pt.triangle_region[on_curve]] = True
+    loose = np.flatnonzero(degree == 1)
+    if len(loose):
+        out[pt.triangle_region[np.isin(tris, loose).any(axis=1)]] = True
     return out
 
 
@@ -95,13 +165,42 @@ def split_needle_creases_steps(
     """:func:`split_needle_creases` in units, one triangulation each (a Blender job runs one per slice)."""
     pt = constrained_triangulation(pattern, backend)
     interval = pattern_interval(pattern)
+    if not (interval > 0 and math.isfinite(interval)):  # an infinite interval keeps every crease whole
+        return pattern, pt
     for _ in range(MAX_ROUNDS - 1):
-        if not (interval > 0 and math.isfinite(interval)):  # an infinite interval keeps every crease whole
-            break
         which = needle_creases(pattern, pt, interval)
         if not which.any():
-            break
+            return pattern, pt
         yield "triangulated"
-        pattern = subdivide_edges(pattern, which, interval)
+        step, note = _within_budget(pattern, which, interval)
+        pattern = subdivide_edges(pattern, which, step)
         pt = constrained_triangulation(pattern, backend)
+        if note:  # the segment budget is spent: no further round
+            return replace(pattern, warnings=[*pattern.warnings, note]), pt
+    if needle_creases(pattern, pt, interval).any():
+        corner = float(corner_angles(pt.vertices, pt.triangles).min())
+        note = (
+            f"meshing: needles are left beside long straight creases after {MAX_ROUNDS - 1} round(s) of splits "
+            f"(smallest corner {corner:.2f}°)"
+        )
+        pattern = replace(pattern, warnings=[*pattern.warnings, note])
     return pattern, pt
+
+
+def _within_budget(pattern: CreasePattern, which: np.ndarray, interval: float) -> tuple[float, str]:
+    """The interval to split ``which`` at, and a warning (or ""): ``interval``, or larger where its pieces would take
+    the pattern past the discretisation's :data:`~..pattern.discretize.MAX_SEGMENTS` (150 pleats 2 mm apart on a
+    1 m sheet, a curve among them, at a 0.5 mm interval: 300,000 pieces), as the discretisation enlarges its own
+    parameters."""
+    e = pattern.edges[which]
+    length = np.hypot(*(pattern.vertices[e[:, 1]] - pattern.vertices[e[:, 0]]).T)
+    room = MAX_SEGMENTS - (pattern.n_edges - len(e))
+    if float(np.ceil(length / interval).sum()) <= room:
+        return interval, ""
+    wider = max(interval, float(length.sum()) / max(room - len(e), 1))
+    while float(np.ceil(length / wider).sum()) > room:
+        wider *= 1.25
+    return wider, (
+        f"meshing: splitting {len(e)} straight crease(s) beside needles at the interval {interval:g} mm would make "
+        f"more than {MAX_SEGMENTS} segments; split at {wider:.4g} mm"
+    )

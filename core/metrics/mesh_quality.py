@@ -20,11 +20,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh, corner_angles
-from ..mesh.needles import split_needle_creases
+from ..mesh.needles import NEEDLE_DEG, split_needle_creases
 from ..pattern.model import CreasePattern
 
-SLIVER_DEG = 1.0
-"""Corners under this many degrees are counted as slivers (the issue's count: 110 such corners stalled a solve)."""
+SLIVER_DEG = NEEDLE_DEG
+"""Corners under this many degrees (1°) are counted as slivers (the issue's count: 110 such corners stalled a
+solve); the triangulation splits long straight creases beside such corners (:mod:`..mesh.needles`)."""
 
 
 def forced_smallest_corner(pattern: CreasePattern, backend: str = "auto") -> float:

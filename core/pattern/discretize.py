@@ -185,7 +185,7 @@ def _segment_polyline(
     when refinement stopped at the budget."""
     start, end = seg.points[0], seg.points[-1]
     if seg.is_straight:
-        # Straight border segments are subdivided after the planar clean-up (see _subdivide_border), so their
+        # Straight border segments are subdivided after the planar clean-up (see _subdivide_straight), so their
         # pieces are spread evenly between the junctions the designer drew and never leave slivers next to them.
         return np.array([start, end], dtype=float), False, 0.0
     t = curve_parameters(seg, interval, tolerance, budget)
@@ -475,10 +475,11 @@ def _apply_splits(
     return verts, new_edges, stop_e[:-1][same]
 
 
-def _subdivide_border(
+def _subdivide_straight(
     verts: np.ndarray, edges: np.ndarray, attrs: np.ndarray, which: np.ndarray, interval: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Split the straight border edges ``which`` (bool mask) into ⌈length / interval⌉ equal pieces (paper §3.1)."""
+    """Split the straight edges ``which`` (bool mask) into ⌈length / interval⌉ equal pieces (paper §3.1: the border's;
+    :mod:`..mesh.needles`: creases beside needles)."""
     a, b = verts[edges[:, 0]], verts[edges[:, 1]]
     length = np.hypot(*(b - a).T)
     n = np.where(which, np.maximum(1, np.ceil(length / interval - 1e-9)).astype(np.int64), 1)
@@ -556,10 +557,10 @@ def subdivide_edges(pattern: CreasePattern, which: np.ndarray, interval: float |
         return pattern
     if interval is None:
         interval = pattern_interval(pattern)
-    if not (interval > 0 and math.isfinite(interval)):  # a border of one point: nothing to split
+    if not (interval > 0 and math.isfinite(interval)):  # a sheet of one point, or an infinite interval: no split
         return pattern
     m = len(pattern.edges)
-    verts, edges, attrs = _subdivide_border(pattern.vertices, pattern.edges, np.arange(m), which, interval)
+    verts, edges, attrs = _subdivide_straight(pattern.vertices, pattern.edges, np.arange(m), which, interval)
     if len(edges) == m:
         return pattern
     first = np.r_[True, attrs[1:] != attrs[:-1]]
@@ -1602,7 +1603,7 @@ def discretize_steps(
     # step 6: border pieces drawn straight, between junctions, split evenly (a flattened curve's too: its chords can
     # be far longer than the interval, and the rulings need border vertices to end at)
     drawn_straight = (assignment == "B") & ~pieces.from_curve[attrs]
-    verts, edges, kept = _subdivide_border(verts, edges, np.arange(len(edges)), drawn_straight, interval)
+    verts, edges, kept = _subdivide_straight(verts, edges, np.arange(len(edges)), drawn_straight, interval)
     attrs, from_curve = attrs[kept], from_curve[kept]
 
     # drop stray vertices, renumber

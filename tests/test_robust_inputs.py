@@ -283,6 +283,29 @@ def test_a_crease_that_just_misses_another_is_joined_to_it() -> None:
         assert not any("joined to it" in w or "past a crossing" in w for w in p.warnings), p.warnings
 
 
+def test_a_crease_drawn_onto_a_curve_is_not_told_it_stopped_short() -> None:
+    """A helper's ray drawn exactly onto an r = 30 mm circle on a 200 mm sheet (its end computed in full precision):
+    the gap was measured to the circle's chord, which stands up to the chord tolerance inside the circle, and the
+    designer was told the ray "stopped just short" by 0.076 mm. Within the merge and chord tolerances of a curve's
+    chord the end is joined without a warning; 0.5 mm short it is joined with one."""
+    size = 'width="200mm" height="200mm" viewBox="0 0 200 200"'
+    sheet = '<rect x="0" y="0" width="200" height="200" fill="none" stroke="#000000"/>'
+    circle = '<circle cx="100" cy="100" r="30" fill="none" stroke="#0000ff" opacity="0.5"/>'
+
+    def ray_from(radius: float) -> CreasePattern:
+        xy = 100.0 + radius / math.sqrt(2.0)
+        ray = f'<line id="ray" x1="{xy!r}" y1="{xy!r}" x2="200" y2="200" stroke="#ff0000" opacity="0.3"/>'
+        return discretize(parse_svg_text(svg(sheet + circle + ray, size), "t.svg").curves)
+
+    on = ray_from(30.0)
+    assert not any("short" in w for w in on.warnings), on.warnings
+    ray = on.edges[on.assignments == "M"].ravel()
+    tip = ray[np.argmin(on.vertices[ray, 0])]
+    assert np.count_nonzero(on.edges == tip) >= 3  # the ray meets the circle
+    short = ray_from(30.5)
+    assert any("stopped just short of another crease" in w for w in short.warnings), short.warnings
+
+
 def test_near_miss_joins_keep_bridges_aim_at_crossings_and_close_an_x() -> None:
     """A reviewer's cases (200 mm sheets, reach 2 mm): a cut's gap is a bridge of paper and is kept (an L of cuts
     1.5 mm short of each other had cut the sheet in two; so is a tab between a cut and the border); a valley aimed

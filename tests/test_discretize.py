@@ -380,6 +380,8 @@ def _cross2(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 )
 # both ends of a segment one merge tolerance long lie on the vertical line: split it once, at the exact vertex
 @example(lines=[(0.001, 0, 0, 0), (0, 0, 1, 1), (0, 1, 0, -1)])
+# a crossing inside one segment a merge tolerance from the other's end, that end as far from the first's
+@example(lines=[(0.0, 0.0, 1.0, 1.0), (1.0, 0.0, 0.0, 0.001)])
 def test_random_segments_become_a_planar_graph(lines) -> None:
     """After the clean-up no two segments cross or overlap, and no vertex lies inside another segment."""
     curves = [

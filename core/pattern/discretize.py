@@ -13,7 +13,8 @@ Steps, in order:
 3. **Planar arrangement.** Vertices closer than ``merge_tolerance`` are merged (into the first representative, as
    Origami Simulator does; border vertices come first so the outline never moves); crossing segments (X) and
    endpoints lying on another segment (T) are split at the intersection (a computed crossing within
-   :data:`SNAP_FACTOR` merge tolerances of an existing vertex snaps to it); zero-length and duplicate segments are
+   :data:`SNAP_FACTOR` merge tolerances of an existing vertex snaps to it; one inside a segment but within the merge
+   tolerance of the other's end splits the first at that end); zero-length and duplicate segments are
    removed. Candidate pairs come from a uniform grid over the segments' bounding boxes, so the work grows with the
    number of nearby pairs, not with E².
 4. **Outside pieces.** Border pieces that are no part of an outline (a black slit from the edge, a black line
@@ -405,6 +406,24 @@ def _split_records(
         rec_e += [ib[~own_i], jb[~own_j]]
         rec_d += [d_i[~own_i], d_j[~own_j]]
         rec_v += [ids[~own_i], ids[~own_j]]
+    # A crossing inside one segment but within tol of an end of the other: that end splits the first segment at the
+    # crossing, as a T-junction would (the T test below projects the end, and (0,0)–(1,1) crossed by
+    # (1,0)–(0,0.001), whose end lies a merge tolerance from (0,0), projects within tol of that end and was missed:
+    # the two crossed for good)
+    for near_end, seg_idx, other_idx, dist_in, dist_other, length_other in (
+        (in_a & ~in_b, i, j, da, db, lb),
+        (in_b & ~in_a, j, i, db, da, la),
+    ):
+        end_v = np.where(dist_other <= 0.5 * length_other, edges[other_idx, 0], edges[other_idx, 1])[near_end]
+        seg_e, seg_d = seg_idx[near_end], dist_in[near_end]
+        if fixed is not None:  # the outline never moves: only to a vertex within tol of its line
+            ea, eb = verts[edges[seg_e, 0]], verts[edges[seg_e, 1]]
+            off = np.abs(_cross(eb - ea, verts[end_v] - ea)) / np.maximum(np.hypot(*(eb - ea).T), 1e-300)
+            ok = ~fixed[seg_e] | (off <= tol)
+            seg_e, seg_d, end_v = seg_e[ok], seg_d[ok], end_v[ok]
+        rec_e.append(seg_e)
+        rec_d.append(seg_d)
+        rec_v.append(end_v)
     # T-junctions (and collinear overlaps): an endpoint of one segment within tol of the other's interior splits
     # the other at that endpoint. Checked directly, not through the line intersection, so nearly parallel
     # segments are caught too.

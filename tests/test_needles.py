@@ -135,14 +135,65 @@ def _pleats(tmp_path: Path, count: int, gap: float, *, arc: bool, length: float 
     return read_pattern(path)
 
 
-def test_straight_pleats_alone_are_left_whole(tmp_path: Path) -> None:
-    """Pleats of straight creases alone fold as flat panels: 150 pleats 2 mm apart on a 1 m sheet mesh as strips of
-    two 0.1° triangles and fold exactly, as drawn. Splitting them (the first version of the split) took 344 faces to
-    6,644 at the default interval and to 604,906 at 0.5 mm (9 s, 1 GB; the helper's review)."""
-    pattern = _pleats(tmp_path, 150, 2.0, arc=False, length=1000.0)
-    split, pt = split_needle_creases(pattern)
-    assert split is pattern
-    assert corner_angles(pt.vertices, pt.triangles).min() < 0.2
+def test_a_hypar_folds_closer_to_its_angles_split(tmp_path: Path) -> None:
+    """A hypar (20 concentric squares 5 mm apart, valley diagonals) has straight creases only, and its trapezoids
+    bend: whole, they fanned needles (0.32°) and at 100 % the fold missed its angles by 46° on average at 2.8 %
+    strain; split, by 11° at 0.9 % (a review session's drawing; the revision that left faces of straight creases
+    alone whole brought the 46° back)."""
+    body = ['<path id="border" d="M 0 0 L 200 0 L 200 200 L 0 200 Z" fill="none" stroke="#000000"/>']
+    for k in range(1, 20):
+        lo, hi = 100 - 5 * k, 100 + 5 * k
+        colour = "#ff0000" if k % 2 else "#0000ff"
+        body.append(
+            f'<path id="sq{k}" d="M {lo} {lo} L {hi} {lo} L {hi} {hi} L {lo} {hi} Z" fill="none" '
+            f'stroke="{colour}" opacity="0.5"/>'
+        )
+    body += [
+        '<path id="d1" d="M 0 0 L 200 200" stroke="#0000ff" opacity="0.5"/>',
+        '<path id="d2" d="M 200 0 L 0 200" stroke="#0000ff" opacity="0.5"/>',
+    ]
+    path = tmp_path / "hypar.svg"
+    path.write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="0 0 200 200">'
+        + "".join(body)
+        + "</svg>"
+    )
+    pattern = read_pattern(path)
+    whole = fold_pattern(replace(pattern, interval=math.inf), percent=1.0).report
+    split = fold_pattern(pattern, percent=1.0).report
+    assert whole["smallest_corner_deg"] < 0.5 and split["smallest_corner_deg"] > 10.0
+    assert split["converged"] and split["negative_pivots"] == 0, split["message"]
+    assert split["fold_angle_error_mean_deg"] < 0.4 * whole["fold_angle_error_mean_deg"]
+    assert split["strain_mean_pct"] < 0.5 * whole["strain_mean_pct"]
+
+
+def test_a_split_is_carried_across_thin_strips_only(tmp_path: Path) -> None:
+    """Marked, a crease carries its split to the creases parallel to it across thin strips (4 mm wide, 200 mm
+    long), not across wide faces (100 mm between two verticals): a grid of squares carried 24 marked creases to
+    5,001 before the strips had to be thin (a review session's drawing)."""
+    import curved_fold.core.mesh.needles as needles
+
+    body = ['<path id="border" d="M 0 0 L 200 0 L 200 200 L 0 200 Z" fill="none" stroke="#000000"/>']
+    body += [f'<path id="h{y}" d="M 0 {y} L 200 {y}" stroke="#ff0000" opacity="0.5"/>' for y in (100, 104, 108)]
+    body += [f'<path id="v{x}" d="M {x} 120 L {x} 200" stroke="#0000ff" opacity="0.5"/>' for x in (50, 150)]
+    path = tmp_path / "strips.svg"
+    path.write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="0 0 200 200">'
+        + "".join(body)
+        + "</svg>"
+    )
+    pattern = read_pattern(path)
+    pt = constrained_triangulation(pattern)
+    v, e = pattern.vertices, pattern.edges
+    horizontal = np.abs(v[e[:, 0], 1] - v[e[:, 1], 1]) < 1e-9
+    eligible = (pattern.assignments != "B") & np.ones(len(e), bool)
+    start = np.zeros(len(e), bool)
+    start[np.flatnonzero(horizontal & (np.abs(v[e[:, 0], 1] + 100) < 1e-9))[0]] = True
+    grown = needles._across_strips(pattern, pt, start, eligible)
+    assert set(np.round(v[e[grown, 0], 1], 6).tolist()) == {-100.0, -104.0, -108.0} and horizontal[grown].all()
+    start = np.zeros(len(e), bool)
+    start[np.flatnonzero(~horizontal & (np.abs(v[e[:, 0], 0] - 50) < 1e-9))[0]] = True
+    assert np.array_equal(needles._across_strips(pattern, pt, start, eligible), start)
 
 
 def test_a_split_is_carried_across_parallel_strips_in_one_round(tmp_path: Path, monkeypatch) -> None:
@@ -176,6 +227,35 @@ def test_the_split_keeps_within_the_segment_budget(sine, monkeypatch) -> None:
     assert note.startswith("meshing: splitting ") and f"more than {budget} segments; split at " in note
 
 
+def test_no_split_when_the_segment_budget_is_spent(sine, monkeypatch) -> None:
+    """A pattern already at the segment budget gets no split, a warning, and no endless search for an interval (a
+    review session's 205,000-segment grid hung there)."""
+    import curved_fold.core.mesh.needles as needles
+
+    monkeypatch.setattr(needles, "MAX_SEGMENTS", sine.n_edges)
+    split, _ = split_needle_creases(sine)
+    assert split.n_edges == sine.n_edges
+    assert any("were not split: the pattern already has 229 segments (limit 229)" in w for w in split.warnings)
+
+
+def test_a_fold_file_keeps_the_interval_its_creases_were_split_at(sine, tmp_path: Path) -> None:
+    """Folded at a 40 mm interval and written as FOLD (the folded mesh, or the crease pattern), the file keeps the
+    interval (``curved_fold:interval``), so it reads back to the same mesh: at the sheet's default it was split
+    again (394 → 790 faces; a review session's finding)."""
+    from curved_fold.core.io.fold import pattern_for_folding, read_fold, write_folded_fold, write_pattern_fold
+
+    coarse = read_pattern(DATA / "sine_across_pleats.svg", interval=40.0)
+    mesh = build_mesh(coarse)
+    folded, crease_pattern = tmp_path / "folded.fold", tmp_path / "pattern.fold"
+    write_folded_fold(folded, mesh, [np.column_stack([mesh.vertices, np.zeros(mesh.n_vertices)])])
+    write_pattern_fold(crease_pattern, coarse)
+    for path in (folded, crease_pattern):
+        again = build_mesh(pattern_for_folding(read_fold(path)))
+        assert again.n_faces == mesh.n_faces and np.allclose(
+            np.sort(again.vertices, axis=0), np.sort(mesh.vertices, axis=0)
+        )
+
+
 def test_needles_left_at_the_round_cap_are_reported(sine, monkeypatch) -> None:
     """With no round left to split them, the needles stay, and a warning gives the smallest corner."""
     import curved_fold.core.mesh.needles as needles
@@ -184,6 +264,7 @@ def test_needles_left_at_the_round_cap_are_reported(sine, monkeypatch) -> None:
     split, _ = split_needle_creases(sine)
     assert split.n_edges == sine.n_edges
     assert any(
-        "needles are left beside long straight creases after 0 round(s) of splits (smallest corner 0.03°)" in w
+        "needles are left beside long straight creases after 0 round(s) of splits (the mesh's smallest corner 0.03°)"
+        in w
         for w in split.warnings
     ), split.warnings

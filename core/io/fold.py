@@ -435,10 +435,22 @@ def fold_to_pattern(doc: FoldDocument, source: str | None = None) -> CreasePatte
         edges=edges,
         sources=sources,
         warnings=list(doc.warnings) + [str(w) for w in data.get(PREFIX + "warnings", [])],
+        interval=_interval(data, src),
         **columns,
     )
     pattern.validate()
     return pattern
+
+
+def _interval(data: dict[str, Any], source: str) -> float:
+    """``curved_fold:interval`` in mm (the interval our pattern was discretised at, in the file's unit; the
+    triangulation splits long straight creases beside needles at it), or nan (another tool's file)."""
+    value = data.get(PREFIX + "interval")
+    if value is None:
+        return math.nan
+    if isinstance(value, bool) or not isinstance(value, int | float) or not (value > 0 and math.isfinite(value)):
+        raise PatternError(f"{source}: {PREFIX}interval must be a positive number, got {value!r}")
+    return float(value) * UNIT_MM.get(str(data.get("frame_unit", "unit")), 1.0)
 
 
 def read_fold_pattern(path: str | os.PathLike[str]) -> CreasePattern:
@@ -561,6 +573,7 @@ def fold_to_mesh(doc: FoldDocument, source: str | None = None) -> FoldMesh:
         faces=[np.asarray(f, dtype=np.int64) for f in faces] if isinstance(faces, list) else [],
         mesh_type=str(data.get(PREFIX + "mesh_type", "ruling")),
         sources=[str(s) for s in data.get(PREFIX + "sources", [])],
+        interval=_interval(data, src),
     )
 
 
@@ -610,6 +623,8 @@ def pattern_to_fold(pattern: CreasePattern) -> dict[str, Any]:
     )
     if unset.any():
         data[PREFIX + "angle_unset"] = unset.tolist()
+    if math.isfinite(pattern.interval):
+        data[PREFIX + "interval"] = pattern.interval
     return data
 
 
@@ -678,6 +693,8 @@ def folded_to_fold(
             PREFIX + "pattern_faces": [np.asarray(f).tolist() for f in mesh.faces],
         }
     )
+    if math.isfinite(mesh.interval):  # read back, its long straight creases are split as they were
+        data[PREFIX + "interval"] = mesh.interval * scale
     data["file_frames"] = []
     for k, p in enumerate(pos):
         fr: dict[str, Any] = {

@@ -243,6 +243,7 @@ def _build_mesh_steps(
         generation_ms=generation_ms,
         sources=list(pattern.sources),
         warnings=warnings,
+        interval=pattern.interval,
     )
     bad = np.flatnonzero(mesh.signed_areas() <= 0)
     if len(bad):  # pragma: no cover - every stage keeps triangles CCW; fail loudly if one does not

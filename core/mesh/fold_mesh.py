@@ -9,6 +9,7 @@ along that face's boundary).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,7 +34,8 @@ class FoldMesh:
     * ``faces``: the crease-pattern faces as counter-clockwise vertex loops (arrays of vertex indices)
 
     ``mesh_type`` is ``"earcut"``, ``"cdt"`` or ``"ruling"``; ``swaps`` counts the edge swaps applied;
-    ``generation_ms`` is the wall time of triangulation plus swaps.
+    ``generation_ms`` is the wall time of triangulation plus swaps; ``interval`` the pattern's discretisation
+    interval (mm; nan if unknown), which a FOLD file of the mesh keeps so that, read back, it meshes the same.
     """
 
     vertices: np.ndarray
@@ -50,6 +52,7 @@ class FoldMesh:
     generation_ms: float = 0.0
     sources: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    interval: float = math.nan
 
     def __post_init__(self) -> None:
         self.vertices = np.asarray(self.vertices, dtype=np.float64).reshape(-1, 2)

@@ -10,11 +10,9 @@ with vertices along the crease the same drawing meshes with far larger corners.
 So, as the border is (§3.1), such a crease is split into ⌈length / interval⌉ equal pieces (:func:`needle_creases`):
 
 * a **needle** is a triangle with a corner under :data:`NEEDLE_DEG` that is not the angle between two segments (that
-  one is the drawing's own), in a face whose paper bends: a curve piece on its boundary or a crease ending inside it
-  (:func:`_bending_faces`). A face of straight creases alone folds as a flat panel, and its needles fold with it
-  (parallel pleats 2 mm apart on a 1 m sheet: strips of two 0.1° triangles, folded exactly);
+  one is the drawing's own);
 * the creases split are the long straight creases bounding the needle's corner, and those parallel to them across
-  the faces beside them (:func:`_across_strips`: a strip split on one side only fans from the other side's ends);
+  thin strips beside them (:func:`_across_strips`: a strip split on one side only fans from the other side's ends);
 * the pattern is then triangulated again, until no crease is split (:data:`MAX_ROUNDS`), within the
   discretisation's segment budget (:func:`_within_budget`).
 
@@ -43,7 +41,8 @@ NEEDLE_DEG = 1.0
 ``metrics.mesh_quality.SLIVER_DEG``)."""
 
 STRIP_DEG = 10.0
-"""Creases on one face within this angle of parallel to a split one are split with it (:func:`_across_strips`)."""
+"""Creases on one face within this angle of parallel to a split one, and as thin a strip from it, are split with it
+(:func:`_across_strips`)."""
 
 MAX_ROUNDS = 64
 """Triangulations made at most: the first, and one after each round of splits (each splits at least one crease).
@@ -53,10 +52,12 @@ left at the cap."""
 
 def needle_creases(pattern: CreasePattern, pt: PlanarTriangulation, interval: float) -> np.ndarray:
     """Mask of ``pattern``'s edges to split: straight creases (not border, not cut, not a curve piece) longer than
-    ``interval`` that bound a needle's sector. A needle is a triangle of ``pt`` with a corner under
-    :data:`NEEDLE_DEG` between two sides that are not both segments (a corner between two segments is the drawing's
-    own); its sector is the angle around the corner's vertex between the segments on either side of it, and a long
-    straight crease bounding it gives the fan no vertex nearer than the crease's far end."""
+    ``interval`` that bound a needle's sector, and those parallel to them across thin strips (:func:`_across_strips`).
+    A needle is a triangle of ``pt`` with a corner under :data:`NEEDLE_DEG` between two sides that are not both
+    segments (a corner between two segments is the drawing's own); its sector is the angle around the corner's
+    vertex between the segments on either side of it, and a long straight crease bounding it gives the fan no vertex
+    nearer than the crease's far end. Faces of straight creases alone count too: a hypar's trapezoids bend, and kept
+    whole its fold missed its angles by 47° (10° split; a review session's drawing)."""
     e = pattern.edges
     length = np.hypot(*(pattern.vertices[e[:, 1]] - pattern.vertices[e[:, 0]]).T)
     eligible = ~np.isin(pattern.assignments, ("B", "C")) & ~pattern.edge_from_curve & (length > interval * (1 + 1e-9))
@@ -78,15 +79,12 @@ def needle_creases(pattern: CreasePattern, pt: PlanarTriangulation, interval: fl
     ends, ends_edge, angle = ends[order], ends_edge[order], angle[order]
     first = np.searchsorted(ends[:, 0], np.arange(len(pts)), "left")
     last = np.searchsorted(ends[:, 0], np.arange(len(pts)), "right")
-    bending = _bending_faces(pattern, pt, np.diff(np.r_[first, len(ends)]) if len(pts) else np.zeros(0, np.int64))
     for t, k in zip(t_small.tolist(), k_small.tolist(), strict=True):
-        if not bending[pt.triangle_region[t]]:
-            continue
         w, x, y = int(tris[t, k]), int(tris[t, (k + 1) % 3]), int(tris[t, (k + 2) % 3])
         if (min(w, x), max(w, x)) in pt.segment_of and (min(w, y), max(w, y)) in pt.segment_of:
             continue
         lo, hi = first[w], last[w]  # w is on a segment: every triangulation vertex is
-        mid = pts[x] + pts[y] - 2.0 * pts[w]  # the corner's bisector (CCW triangle: x then y)
+        mid = pts[x] + pts[y] - 2.0 * pts[w]  # towards the opposite side's midpoint, inside the corner
         phi = np.arctan2(mid[1], mid[0])
         gap = np.mod(angle[lo:hi] - phi, 2.0 * np.pi)
         for side in (int(np.argmin(gap)), int(np.argmax(gap))):  # the first segment CCW, the first CW
@@ -99,7 +97,9 @@ def _across_strips(
     pattern: CreasePattern, pt: PlanarTriangulation, marked: np.ndarray, eligible: np.ndarray
 ) -> np.ndarray:
     """``marked`` grown across strips: a long straight crease on the boundary of a face beside a marked one, within
-    :data:`STRIP_DEG` of parallel to it, is marked too, and so on. Split on one side only, a strip between parallel
+    :data:`STRIP_DEG` of parallel to it and no farther from its line than ``tan STRIP_DEG`` of their length (a
+    strip, not a grid's square: 24 marked creases of a grid of squares became 5,001 without this), is marked too, and
+    so on. Split on one side only, a strip between parallel
     creases fans from the whole side's ends to the split side's new vertices (24 pleats 8 mm apart: corners of
     0.45–0.89°), a needle the next round would split: one round, not one per strip (120 pleats, an arc beside the
     first: 64 triangulations before)."""
@@ -107,8 +107,10 @@ def _across_strips(
         return marked
     v, e = pattern.vertices, pattern.edges
     direction = v[e[:, 1]] - v[e[:, 0]]
-    direction = direction / np.maximum(np.hypot(*direction.T), 1e-300)[:, None]
-    cos_max = math.cos(math.radians(STRIP_DEG))
+    length = np.hypot(*direction.T)
+    direction = direction / np.maximum(length, 1e-300)[:, None]
+    middle = 0.5 * (v[e[:, 0]] + v[e[:, 1]])
+    cos_max, thin = math.cos(math.radians(STRIP_DEG)), math.tan(math.radians(STRIP_DEG))
     faces_of: dict[int, set[int]] = {}
     edges_of: list[list[int]] = []
     for f, loops in enumerate(pt.face_loops):
@@ -127,29 +129,13 @@ def _across_strips(
         k = queue.pop()
         for f in faces_of.get(k, ()):
             for other in edges_of[f]:
-                if not out[other] and abs(float(direction[k] @ direction[other])) >= cos_max:
+                if out[other] or abs(float(direction[k] @ direction[other])) < cos_max:
+                    continue
+                gap = middle[other] - v[e[k, 0]]
+                width = abs(float(direction[k, 0] * gap[1] - direction[k, 1] * gap[0]))
+                if width <= thin * max(float(length[k]), float(length[other])):  # a strip, not a grid's square
                     out[other] = True
                     queue.append(other)
-    return out
-
-
-def _bending_faces(pattern: CreasePattern, pt: PlanarTriangulation, degree: np.ndarray) -> np.ndarray:
-    """Per crease-pattern face of ``pt``, whether its paper bends: a curve piece on its boundary, or a crease that
-    ends inside it (a vertex with one segment, ``degree`` per triangulation vertex). A face bounded by straight
-    creases alone folds as a flat panel, and a needle in it stays flat with it (150 parallel pleats 2 mm apart on a
-    1 m sheet: strips of two 0.1° triangles, folded exactly)."""
-    n_faces = int(pt.triangle_region.max()) + 1 if len(pt.triangle_region) else 0
-    out = np.zeros(n_faces, dtype=bool)
-    tris = pt.triangles
-    n = np.int64(max(len(pt.vertices), 1))
-    curve = [i * n + j for (i, j), k in pt.segment_of.items() if pattern.edge_from_curve[k]]
-    if curve:
-        sides = np.sort(np.stack([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]], axis=1), axis=2)
-        on_curve = np.isin(sides[..., 0] * n + sides[..., 1], np.asarray(curve, dtype=np.int64)).any(axis=1)
-        out[pt.triangle_region[on_curve]] = True
-    loose = np.flatnonzero(degree == 1)
-    if len(loose):
-        out[pt.triangle_region[np.isin(tris, loose).any(axis=1)]] = True
     return out
 
 
@@ -181,7 +167,7 @@ def split_needle_creases_steps(
         corner = float(corner_angles(pt.vertices, pt.triangles).min())
         note = (
             f"meshing: needles are left beside long straight creases after {MAX_ROUNDS - 1} round(s) of splits "
-            f"(smallest corner {corner:.2f}°)"
+            f"(the mesh's smallest corner {corner:.2f}°)"
         )
         pattern = replace(pattern, warnings=[*pattern.warnings, note])
     return pattern, pt
@@ -191,16 +177,22 @@ def _within_budget(pattern: CreasePattern, which: np.ndarray, interval: float) -
     """The interval to split ``which`` at, and a warning (or ""): ``interval``, or larger where its pieces would take
     the pattern past the discretisation's :data:`~..pattern.discretize.MAX_SEGMENTS` (150 pleats 2 mm apart on a
     1 m sheet, a curve among them, at a 0.5 mm interval: 300,000 pieces), as the discretisation enlarges its own
-    parameters."""
+    parameters; ``inf`` (no split) when not even one more piece fits."""
     e = pattern.edges[which]
     length = np.hypot(*(pattern.vertices[e[:, 1]] - pattern.vertices[e[:, 0]]).T)
-    room = MAX_SEGMENTS - (pattern.n_edges - len(e))
+    room = MAX_SEGMENTS - (pattern.n_edges - len(e))  # pieces the creases to split may become
     if float(np.ceil(length / interval).sum()) <= room:
         return interval, ""
-    wider = max(interval, float(length.sum()) / max(room - len(e), 1))
-    while float(np.ceil(length / wider).sum()) > room:
-        wider *= 1.25
-    return wider, (
+    if room <= len(e):
+        return math.inf, (
+            f"meshing: {len(e)} straight crease(s) beside needles were not split: the pattern already has "
+            f"{pattern.n_edges} segments (limit {MAX_SEGMENTS})"
+        )
+    lo, hi = interval, float(length.max())  # too many pieces at lo, one piece each (≤ room) at hi
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if float(np.ceil(length / mid).sum()) > room else (lo, mid)
+    return hi, (
         f"meshing: splitting {len(e)} straight crease(s) beside needles at the interval {interval:g} mm would make "
-        f"more than {MAX_SEGMENTS} segments; split at {wider:.4g} mm"
+        f"more than {MAX_SEGMENTS} segments; split at {hi:.4g} mm"
     )

@@ -135,6 +135,16 @@ def _pleats(tmp_path: Path, count: int, gap: float, *, arc: bool, length: float 
     return read_pattern(path)
 
 
+def _sheet_200(path: Path, body: list[str]):
+    """The pattern of a 200 mm SVG sheet drawn with the elements ``body``, written to ``path``."""
+    path.write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="0 0 200 200">'
+        + "".join(body)
+        + "</svg>"
+    )
+    return read_pattern(path)
+
+
 def test_a_hypar_folds_closer_to_its_angles_split(tmp_path: Path) -> None:
     """A hypar (20 concentric squares 5 mm apart, valley diagonals) has straight creases only, and its trapezoids
     bend: whole, they fanned needles (0.32°) and at 100 % the fold missed its angles by 46° on average at 2.8 %
@@ -152,13 +162,7 @@ def test_a_hypar_folds_closer_to_its_angles_split(tmp_path: Path) -> None:
         '<path id="d1" d="M 0 0 L 200 200" stroke="#0000ff" opacity="0.5"/>',
         '<path id="d2" d="M 200 0 L 0 200" stroke="#0000ff" opacity="0.5"/>',
     ]
-    path = tmp_path / "hypar.svg"
-    path.write_text(
-        '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="0 0 200 200">'
-        + "".join(body)
-        + "</svg>"
-    )
-    pattern = read_pattern(path)
+    pattern = _sheet_200(tmp_path / "hypar.svg", body)
     whole = fold_pattern(replace(pattern, interval=math.inf), percent=1.0).report
     split = fold_pattern(pattern, percent=1.0).report
     assert whole["smallest_corner_deg"] < 0.5 and split["smallest_corner_deg"] > 10.0
@@ -176,17 +180,11 @@ def test_a_split_is_carried_across_thin_strips_only(tmp_path: Path) -> None:
     body = ['<path id="border" d="M 0 0 L 200 0 L 200 200 L 0 200 Z" fill="none" stroke="#000000"/>']
     body += [f'<path id="h{y}" d="M 0 {y} L 200 {y}" stroke="#ff0000" opacity="0.5"/>' for y in (100, 104, 108)]
     body += [f'<path id="v{x}" d="M {x} 120 L {x} 200" stroke="#0000ff" opacity="0.5"/>' for x in (50, 150)]
-    path = tmp_path / "strips.svg"
-    path.write_text(
-        '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="0 0 200 200">'
-        + "".join(body)
-        + "</svg>"
-    )
-    pattern = read_pattern(path)
+    pattern = _sheet_200(tmp_path / "strips.svg", body)
     pt = constrained_triangulation(pattern)
     v, e = pattern.vertices, pattern.edges
     horizontal = np.abs(v[e[:, 0], 1] - v[e[:, 1], 1]) < 1e-9
-    eligible = (pattern.assignments != "B") & np.ones(len(e), bool)
+    eligible = pattern.assignments != "B"
     start = np.zeros(len(e), bool)
     start[np.flatnonzero(horizontal & (np.abs(v[e[:, 0], 1] + 100) < 1e-9))[0]] = True
     grown = needles._across_strips(pattern, pt, start, eligible)

@@ -407,7 +407,7 @@ def test_duplicate_curves_with_different_roles_warn_and_keep_one() -> None:
         BORDER + '<path id="c1" d="M50 0 L50 100" stroke="#f00"/><path id="c2" d="M50 0 L50 100" stroke="#00f"/>'
     )
     assert any(
-        "duplicate segment(s) with different assignments" in w
+        "segment(s) of creases with different roles lie on top of each other" in w
         and "kept SVG <path id='c1'> (line 3) (M) over SVG <path id='c2'> (line 3) (V)" in w
         for w in p.warnings
     )

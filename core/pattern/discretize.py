@@ -968,13 +968,15 @@ def _remove_duplicates(
             shown = "; ".join(f"kept {s1} ({a1}) over {s2} ({a2})" for s1, a1, s2, a2 in pairs[:5])
             more = f"; and {len(pairs) - 5} more" if len(pairs) > 5 else ""
             warnings.append(
-                f"{int(differ.sum())} duplicate segment(s) with different assignments (border > cut > "
-                f"mountain/valley > undriven > facet): {shown}{more}"
+                f"{int(differ.sum())} segment(s) of creases with different roles lie on top of each other (drawn "
+                f"twice, or within the merge tolerance of each other): {shown}{more}, by role (border > cut > "
+                "mountain/valley > undriven > facet)"
             )
         if angle_differ.any():
             x, y = wa[angle_differ][0], da_[angle_differ][0]
             warnings.append(
-                f"{int(angle_differ.sum())} duplicate segment(s) with different fold angles: kept "
+                f"{int(angle_differ.sum())} segment(s) of creases with different fold angles lie on top of each other: "
+                "kept "
                 f"{sources[edge_poly[x]]} ({angle[x]:g}°) over {sources[edge_poly[y]]} ({angle[y]:g}°), ..."
             )
     winners = np.sort(winners)

@@ -388,10 +388,8 @@ def _split_records(
             # the outline never moves: a crease drawn a little past the border crosses it next to its own end
             # point, outside the sheet; snapping the crossing there bent the border through that point
             for e in (i[both], j[both]):
-                check = np.flatnonzero(fixed[e] & (snap >= 0))
-                ea, eb = verts[edges[e[check], 0]], verts[edges[e[check], 1]]
-                off = np.abs(_cross(eb - ea, verts[snap[check]] - ea)) / np.maximum(np.hypot(*(eb - ea).T), 1e-300)
-                snap[check[off > tol]] = -1
+                check = np.flatnonzero(snap >= 0)
+                snap[check[_bends_outline(verts, edges, fixed, e[check], snap[check], tol)]] = -1
         fresh = snap < 0
         ids = snap.copy()
         ids[fresh] = -1 - (n_new + np.arange(int(fresh.sum())))
@@ -416,10 +414,8 @@ def _split_records(
     ):
         end_v = np.where(dist_other <= 0.5 * length_other, edges[other_idx, 0], edges[other_idx, 1])[near_end]
         seg_e, seg_d = seg_idx[near_end], dist_in[near_end]
-        if fixed is not None:  # the outline never moves: only to a vertex within tol of its line
-            ea, eb = verts[edges[seg_e, 0]], verts[edges[seg_e, 1]]
-            off = np.abs(_cross(eb - ea, verts[end_v] - ea)) / np.maximum(np.hypot(*(eb - ea).T), 1e-300)
-            ok = ~fixed[seg_e] | (off <= tol)
+        if fixed is not None:  # the outline never moves
+            ok = ~_bends_outline(verts, edges, fixed, seg_e, end_v, tol)
             seg_e, seg_d, end_v = seg_e[ok], seg_d[ok], end_v[ok]
         rec_e.append(seg_e)
         rec_d.append(seg_d)
@@ -448,6 +444,16 @@ def _split_records(
         np.concatenate(rec_v).astype(np.int64),
         np.concatenate(new_pts) if new_pts else np.zeros((0, 2)),
     )
+
+
+def _bends_outline(
+    verts: np.ndarray, edges: np.ndarray, fixed: np.ndarray, e: np.ndarray, v: np.ndarray, tol: float
+) -> np.ndarray:
+    """Whether splitting edge ``e[k]`` at vertex ``v[k]`` would bend the outline: the edge is ``fixed`` (a border
+    piece) and the vertex lies farther than ``tol`` from its line."""
+    a, b = verts[edges[e, 0]], verts[edges[e, 1]]
+    off = np.abs(_cross(b - a, verts[v] - a)) / np.maximum(np.hypot(*(b - a).T), 1e-300)
+    return fixed[e] & (off > tol)
 
 
 def _one_split_per_place(

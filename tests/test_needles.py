@@ -247,7 +247,10 @@ def test_a_fold_file_keeps_the_interval_its_creases_were_split_at(sine, tmp_path
     folded, crease_pattern = tmp_path / "folded.fold", tmp_path / "pattern.fold"
     write_folded_fold(folded, mesh, [np.column_stack([mesh.vertices, np.zeros(mesh.n_vertices)])])
     write_pattern_fold(crease_pattern, coarse)
-    for path in (folded, crease_pattern):
+    in_metres = tmp_path / "folded_m.fold"  # the interval is written in the file's unit
+    write_folded_fold(in_metres, mesh, [np.column_stack([mesh.vertices, np.zeros(mesh.n_vertices)])], unit="m")
+    assert pattern_for_folding(read_fold(in_metres)).interval == pytest.approx(40.0, rel=1e-12)
+    for path in (folded, crease_pattern, in_metres):
         again = build_mesh(pattern_for_folding(read_fold(path)))
         assert again.n_faces == mesh.n_faces and np.allclose(
             np.sort(again.vertices, axis=0), np.sort(mesh.vertices, axis=0)

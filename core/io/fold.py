@@ -435,22 +435,22 @@ def fold_to_pattern(doc: FoldDocument, source: str | None = None) -> CreasePatte
         edges=edges,
         sources=sources,
         warnings=list(doc.warnings) + [str(w) for w in data.get(PREFIX + "warnings", [])],
-        interval=_interval(data, src),
+        interval=_interval(doc, src),
         **columns,
     )
     pattern.validate()
     return pattern
 
 
-def _interval(data: dict[str, Any], source: str) -> float:
+def _interval(doc: FoldDocument, source: str) -> float:
     """``curved_fold:interval`` in mm (the interval our pattern was discretised at, in the file's unit; the
     triangulation splits long straight creases beside needles at it), or nan (another tool's file)."""
-    value = data.get(PREFIX + "interval")
+    value = doc.data.get(PREFIX + "interval")
     if value is None:
         return math.nan
     if isinstance(value, bool) or not isinstance(value, int | float) or not (value > 0 and math.isfinite(value)):
         raise PatternError(f"{source}: {PREFIX}interval must be a positive number, got {value!r}")
-    return float(value) * UNIT_MM.get(str(data.get("frame_unit", "unit")), 1.0)
+    return float(value) * UNIT_MM.get(doc.unit, 1.0)
 
 
 def read_fold_pattern(path: str | os.PathLike[str]) -> CreasePattern:
@@ -573,7 +573,7 @@ def fold_to_mesh(doc: FoldDocument, source: str | None = None) -> FoldMesh:
         faces=[np.asarray(f, dtype=np.int64) for f in faces] if isinstance(faces, list) else [],
         mesh_type=str(data.get(PREFIX + "mesh_type", "ruling")),
         sources=[str(s) for s in data.get(PREFIX + "sources", [])],
-        interval=_interval(data, src),
+        interval=_interval(doc, src),
     )
 
 

@@ -108,6 +108,19 @@ def corner_angles(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return out
 
 
+def segments_by_angle(vertices: np.ndarray, segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every segment once from each of its ends, sorted by that end and then by direction: ``(ends, angle, row)``,
+    ``ends[:, 0]`` the vertex and ``ends[:, 1]`` the other end, ``angle`` the direction (radians, ``arctan2``) and
+    ``row`` the row of ``segments`` it is; a vertex's segments are one run, counter-clockwise."""
+    segments = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    ends = np.concatenate([segments, segments[:, ::-1]])
+    row = np.tile(np.arange(len(segments)), 2)
+    d = vertices[ends[:, 1]] - vertices[ends[:, 0]]
+    angle = np.arctan2(d[:, 1], d[:, 0])
+    order = np.lexsort((angle, ends[:, 0]))
+    return ends[order], angle[order], row[order]
+
+
 def polygon_sides(polygons: np.ndarray) -> np.ndarray:
     """The sides ``(k·m, 2)`` of ``k`` polygons given as rows of ``m`` vertex indices, each as a sorted vertex pair
     (row ``i·m + j`` is the side from corner ``j`` of polygon ``i`` to the next)."""

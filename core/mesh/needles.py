@@ -33,7 +33,7 @@ import numpy as np
 from .. import run_to_end
 from ..pattern.discretize import MAX_SEGMENTS, pattern_interval, subdivide_edges
 from ..pattern.model import CreasePattern
-from .fold_mesh import corner_angles
+from .fold_mesh import corner_angles, segments_by_angle
 from .triangulate import PlanarTriangulation, constrained_triangulation
 
 NEEDLE_DEG = 1.0
@@ -71,12 +71,8 @@ def needle_creases(pattern: CreasePattern, pt: PlanarTriangulation, interval: fl
         return out
     seg = np.array(list(pt.segment_of), dtype=np.int64).reshape(-1, 2)
     seg_edge = np.fromiter(pt.segment_of.values(), dtype=np.int64, count=len(seg))
-    ends = np.concatenate([seg, seg[:, ::-1]])  # (w, other end) both ways
-    ends_edge = np.concatenate([seg_edge, seg_edge])
-    d = pts[ends[:, 1]] - pts[ends[:, 0]]
-    angle = np.arctan2(d[:, 1], d[:, 0])
-    order = np.lexsort((angle, ends[:, 0]))
-    ends, ends_edge, angle = ends[order], ends_edge[order], angle[order]
+    ends, angle, row = segments_by_angle(pts, seg)
+    ends_edge = seg_edge[row]
     first = np.searchsorted(ends[:, 0], np.arange(len(pts)), "left")
     last = np.searchsorted(ends[:, 0], np.arange(len(pts)), "right")
     for t, k in zip(t_small.tolist(), k_small.tolist(), strict=True):

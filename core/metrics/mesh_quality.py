@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..mesh.fold_mesh import FoldMesh, corner_angles
+from ..mesh.fold_mesh import FoldMesh, corner_angles, segments_by_angle
 from ..mesh.needles import NEEDLE_DEG, split_needle_creases
 from ..pattern.model import CreasePattern
 
@@ -39,12 +39,8 @@ def forced_smallest_corner(pattern: CreasePattern, backend: str = "auto") -> flo
 def smallest_segment_gap(pattern: CreasePattern) -> float:
     """The smallest angle (degrees) between two consecutive segments around any vertex of ``pattern`` (180° when no
     vertex has two segments); the angle may lie outside the paper, so it bounds the forced corner only from above."""
-    v, e = pattern.vertices, pattern.edges
-    ends = np.concatenate([e, e[:, ::-1]])
-    d = v[ends[:, 1]] - v[ends[:, 0]]
-    ang = np.arctan2(d[:, 1], d[:, 0])
-    order = np.lexsort((ang, ends[:, 0]))
-    ends, ang = ends[order], ang[order]
+    v = pattern.vertices
+    ends, ang, _ = segments_by_angle(v, pattern.edges)
     deg = np.bincount(ends[:, 0], minlength=len(v))
     first = np.r_[True, ends[1:, 0] != ends[:-1, 0]]
     start = np.flatnonzero(first)

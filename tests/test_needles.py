@@ -116,12 +116,7 @@ def test_a_pattern_read_as_segments_is_split_at_its_sheets_default_interval(sine
 def _pleats(tmp_path: Path, count: int, gap: float, *, arc: bool, length: float = 200.0):
     """``count`` parallel straight pleats ``gap`` mm apart across a sheet ``length`` mm wide, with (``arc``) a shallow
     curve 1 mm beside the first (a helper's review drawings, fourteenth pass)."""
-    height = gap * (count + 1)
-    lines = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{length}mm" height="{height}mm" '
-        f'viewBox="0 0 {length} {height}">',
-        f'<path id="border" d="M 0 0 L {length} 0 L {length} {height} L 0 {height} Z" fill="none" stroke="#000000"/>',
-    ]
+    lines = []
     for k in range(1, count + 1):
         colour = "#0000ff" if k % 2 else "#ff0000"
         lines.append(f'<path id="p{k}" d="M 0 {k * gap} L {length} {k * gap}" stroke="{colour}" opacity="0.5"/>')
@@ -130,17 +125,16 @@ def _pleats(tmp_path: Path, count: int, gap: float, *, arc: bool, length: float 
             f'<path id="arc" d="M {0.2 * length} {gap - 1} Q {0.5 * length} {gap - 4} {0.8 * length} {gap - 1}" '
             'stroke="#0000ff" opacity="0.3"/>'
         )
-    path = tmp_path / f"pleats_{count}_{gap}_{arc}.svg"
-    path.write_text("\n".join([*lines, "</svg>"]))
-    return read_pattern(path)
+    return _sheet(tmp_path / f"pleats_{count}_{gap}_{arc}.svg", lines, length, gap * (count + 1))
 
 
-def _sheet_200(path: Path, body: list[str]):
-    """The pattern of a 200 mm SVG sheet drawn with the elements ``body``, written to ``path``."""
+def _sheet(path: Path, body: list[str], width: float = 200.0, height: float = 200.0):
+    """The pattern of an SVG sheet ``width`` × ``height`` mm (its border drawn) with the elements ``body``, written
+    to ``path``."""
+    border = f'<path id="border" d="M 0 0 L {width} 0 L {width} {height} L 0 {height} Z" fill="none" stroke="#000000"/>'
     path.write_text(
-        '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="0 0 200 200">'
-        + "".join(body)
-        + "</svg>"
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}mm" height="{height}mm" '
+        f'viewBox="0 0 {width} {height}">' + border + "".join(body) + "</svg>"
     )
     return read_pattern(path)
 
@@ -150,7 +144,7 @@ def test_a_hypar_folds_closer_to_its_angles_split(tmp_path: Path) -> None:
     bend: whole, they fanned needles (0.32°) and at 100 % the fold missed its angles by 46° on average at 2.8 %
     strain; split, by 11° at 0.9 % (a review session's drawing; the revision that left faces of straight creases
     alone whole brought the 46° back)."""
-    body = ['<path id="border" d="M 0 0 L 200 0 L 200 200 L 0 200 Z" fill="none" stroke="#000000"/>']
+    body = []
     for k in range(1, 20):
         lo, hi = 100 - 5 * k, 100 + 5 * k
         colour = "#ff0000" if k % 2 else "#0000ff"
@@ -162,7 +156,7 @@ def test_a_hypar_folds_closer_to_its_angles_split(tmp_path: Path) -> None:
         '<path id="d1" d="M 0 0 L 200 200" stroke="#0000ff" opacity="0.5"/>',
         '<path id="d2" d="M 200 0 L 0 200" stroke="#0000ff" opacity="0.5"/>',
     ]
-    pattern = _sheet_200(tmp_path / "hypar.svg", body)
+    pattern = _sheet(tmp_path / "hypar.svg", body)
     whole = fold_pattern(replace(pattern, interval=math.inf), percent=1.0).report
     split = fold_pattern(pattern, percent=1.0).report
     assert whole["smallest_corner_deg"] < 0.5 and split["smallest_corner_deg"] > 10.0
@@ -177,10 +171,9 @@ def test_a_split_is_carried_across_thin_strips_only(tmp_path: Path) -> None:
     5,001 before the strips had to be thin (a review session's drawing)."""
     import curved_fold.core.mesh.needles as needles
 
-    body = ['<path id="border" d="M 0 0 L 200 0 L 200 200 L 0 200 Z" fill="none" stroke="#000000"/>']
-    body += [f'<path id="h{y}" d="M 0 {y} L 200 {y}" stroke="#ff0000" opacity="0.5"/>' for y in (100, 104, 108)]
+    body = [f'<path id="h{y}" d="M 0 {y} L 200 {y}" stroke="#ff0000" opacity="0.5"/>' for y in (100, 104, 108)]
     body += [f'<path id="v{x}" d="M {x} 120 L {x} 200" stroke="#0000ff" opacity="0.5"/>' for x in (50, 150)]
-    pattern = _sheet_200(tmp_path / "strips.svg", body)
+    pattern = _sheet(tmp_path / "strips.svg", body)
     pt = constrained_triangulation(pattern)
     v, e = pattern.vertices, pattern.edges
     horizontal = np.abs(v[e[:, 0], 1] - v[e[:, 1], 1]) < 1e-9

@@ -139,6 +139,33 @@ def _sheet(path: Path, body: list[str], width: float = 200.0, height: float = 20
     return read_pattern(path)
 
 
+def test_a_cut_beside_a_crease_is_split_too(tmp_path: Path) -> None:
+    """A straight cut 1 mm beside a long valley, a shallow arc beside both (a review session's kirigami drawing,
+    fourteenth pass): with the cut whole, the split valley's vertices fanned needles to its far ends (corners down to
+    0.1°); split as creases are, none is left, and the mesh is cut open along every piece."""
+    body = [
+        '<path id="s1" d="M 0 90 L 300 90" stroke="#ff0000" opacity="0.5"/>',
+        '<path id="cut" d="M 60 91 L 240 91" stroke="#00ff00"/>',
+        '<path id="a0" d="M 40 88.8 A 3000 3000 0 0 1 260 88.8" fill="none" stroke="#0000ff" opacity="0.3"/>',
+    ]
+    pattern = _sheet(tmp_path / "cut.svg", body, 300.0, 120.0)
+    whole = build_mesh(replace(pattern, interval=math.inf))
+    assert _corners(whole).min() < 0.5
+    mesh = build_mesh(pattern)
+    assert _corners(mesh).min() > NEEDLE_DEG
+    split, _ = split_needle_creases(pattern)
+    pieces = np.count_nonzero(split.assignments == "C")
+    assert pieces == math.ceil(180.0 / pattern.interval)
+    # both sides of every piece are border edges of the mesh: the sheet is cut along the whole of it (SVG y is down)
+    v, e = mesh.vertices * [1.0, -1.0], mesh.edges
+    on_cut = np.all(np.isclose(v[e][:, :, 1], 91.0), axis=1) & np.all(
+        (v[e][:, :, 0] > 59.9) & (v[e][:, :, 0] < 240.1), axis=1
+    )
+    assert np.count_nonzero(on_cut) == 2 * pieces and np.all(mesh.assignments[on_cut] == "B")
+    run = fold_pattern(pattern, percent=1.0)
+    assert run.result.converged and run.report["corners_below_1deg"] == 0
+
+
 def test_a_hypar_folds_closer_to_its_angles_split(tmp_path: Path) -> None:
     """A hypar (20 concentric squares 5 mm apart, valley diagonals) has straight creases only, and its trapezoids
     bend: whole, they fanned needles (0.32°) and at 100 % the fold missed its angles by 46° on average at 2.8 %

@@ -13,6 +13,7 @@ So, as the border is (§3.1), such a crease is split into ⌈length / interval�
   one is the drawing's own);
 * the creases split are the long straight creases bounding the needle's corner, and those parallel to them across
   thin strips beside them (:func:`_across_strips`: a strip split on one side only fans from the other side's ends);
+  a straight cut counts as a crease: it is meshed as one and only then cut open (``triangulate.split_cuts``);
 * the pattern is then triangulated again, until no crease is split (:data:`MAX_ROUNDS`), within the
   discretisation's segment budget (:func:`_within_budget`).
 
@@ -51,7 +52,7 @@ left at the cap."""
 
 
 def needle_creases(pattern: CreasePattern, pt: PlanarTriangulation, interval: float) -> np.ndarray:
-    """Mask of ``pattern``'s edges to split: straight creases (not border, not cut, not a curve piece) longer than
+    """Mask of ``pattern``'s edges to split: straight creases and cuts (not border, not a curve piece) longer than
     ``interval`` that bound a needle's sector, and those parallel to them across thin strips (:func:`_across_strips`).
     A needle is a triangle of ``pt`` with a corner under :data:`NEEDLE_DEG` between two sides that are not both
     segments (a corner between two segments is the drawing's own); its sector is the angle around the corner's
@@ -60,7 +61,7 @@ def needle_creases(pattern: CreasePattern, pt: PlanarTriangulation, interval: fl
     whole its fold missed its angles by 47° (10° split; a review session's drawing)."""
     e = pattern.edges
     length = np.hypot(*(pattern.vertices[e[:, 1]] - pattern.vertices[e[:, 0]]).T)
-    eligible = ~np.isin(pattern.assignments, ("B", "C")) & ~pattern.edge_from_curve & (length > interval * (1 + 1e-9))
+    eligible = (pattern.assignments != "B") & ~pattern.edge_from_curve & (length > interval * (1 + 1e-9))
     out = np.zeros(len(e), dtype=bool)
     if not eligible.any() or len(pt.triangles) == 0:
         return out

@@ -199,7 +199,10 @@ def isolated_creases(mesh: FoldMesh) -> list[dict[str, Any]]:
     return out
 
 
-def _describe(c: dict[str, Any], percent: float) -> str:
+def _describe(c: dict[str, Any], percent: float, mesh_type: str) -> str:
+    """One crease of the verdict's message; where its triangles are slivers, what could mesh it better: a smaller
+    interval, or on Origami Simulator's own mesh (``earcut``, whose slivers the interval does not change) the
+    ruling-aware mesh."""
     how = []
     if c["wrong_way_mm"] > 0:
         how.append(f"{c['wrong_way_mm']:.1f} mm fold the wrong way")
@@ -208,7 +211,8 @@ def _describe(c: dict[str, Any], percent: float) -> str:
     hint = ""
     if c.get("smallest_corner_deg", math.inf) < SLIVER_DEG:  # no room to fold: a mesh matter, not the design's
         corner = c["smallest_corner_deg"]
-        hint = f"; its triangles have corners down to {corner:.2f}° (a smaller interval may mesh it better)"
+        better = "the ruling-aware mesh" if mesh_type == "earcut" else "a smaller interval"
+        hint = f"; its triangles have corners down to {corner:.2f}° ({better} may mesh it better)"
     return (
         f"{c['crease']}: of its {c['length_mm']:.1f} mm, {' and '.join(how)} (folded {c['angle_deg']:.0f}° for "
         f"{c['target_deg']:.0f}°), around ({c['at_mm'][0]:.1f}, {c['at_mm'][1]:.1f}) mm{hint}"
@@ -246,7 +250,7 @@ def verdict(mesh: FoldMesh, fold_angles: np.ndarray, percent: float) -> dict[str
     if flagged:
         parts = []
         if bad and share >= PATTERN_SHARE:
-            listed = "; ".join(_describe(c, percent) for c in bad[:LISTED])
+            listed = "; ".join(_describe(c, percent, mesh.mesh_type) for c in bad[:LISTED])
             more = f"; and {len(bad) - LISTED} more" if len(bad) > LISTED else ""
             parts.append(
                 f"{len(bad)} crease(s), {100 * share:.0f} % of the crease length, fold less than "

@@ -709,7 +709,18 @@ def test_fold_file_not_utf8(tmp_path: Path) -> None:
             None,
             r"pattern edge 4 \(sq\.fold edge 4\) is not an edge of the triangulation: it overlaps another segment",
         ),
-        ([[0, 1], [1, 2], [2, 3], [3, 0], [2, 2]], "BBBBV", None, r"pattern edge 4 starts and ends at one vertex"),
+        (
+            [[0, 1], [1, 2], [2, 3], [3, 0], [2, 2]],
+            "BBBBV",
+            None,
+            r"pattern edge 4 \(sq\.fold edge 4\) starts and ends at one vertex",
+        ),
+        (
+            [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2], [2, 0]],
+            "BBBBVV",
+            None,
+            r"pattern edges 4 \(sq\.fold edge 4\) and 5 \(sq\.fold edge 5\) join the same two vertices",
+        ),
         (
             [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2], [1, 3]],
             "BBBBVM",

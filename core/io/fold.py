@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh, corner_angles, polygon_sides
-from ..pattern.discretize import subdivide_straight_border, with_flattened_curves
+from ..pattern.discretize import subdivide_straight_border, with_flattened_curves, with_thinned_polylines
 from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
 from .atomic import atomic_write_text
 from .fold_validate import load_fold_json
@@ -461,13 +461,14 @@ def read_fold_pattern(path: str | os.PathLike[str]) -> CreasePattern:
 def pattern_for_folding(doc: FoldDocument) -> CreasePattern:
     """The crease pattern a fold of ``doc`` starts from, the same through every door (command line, Blender
     import): :func:`fold_to_pattern` and, for another tool's file (no ``curved_fold:`` fields; ours keep the
-    pieces they were discretised with and their curve flags), its straight border split into pieces and its chains
-    of segments that follow a curve marked as curve pieces, as a drawing's are
-    (:func:`..pattern.discretize.subdivide_straight_border`, :func:`..pattern.discretize.with_flattened_curves`)."""
+    pieces they were discretised with and their curve flags), its polylines sampled far finer than the paper
+    samples thinned, its straight border split into pieces and its chains of segments that follow a curve marked
+    as curve pieces, as a drawing's are (:func:`..pattern.discretize.with_thinned_polylines`,
+    :func:`..pattern.discretize.subdivide_straight_border`, :func:`..pattern.discretize.with_flattened_curves`)."""
     if PREFIX + "edge_polyline" in doc.data:
         return fold_to_pattern(doc)
     doc = _flat_foldable_angles(_without_sliver_facets(doc))
-    pattern = with_flattened_curves(subdivide_straight_border(fold_to_pattern(doc)))
+    pattern = with_flattened_curves(subdivide_straight_border(with_thinned_polylines(fold_to_pattern(doc))))
     pattern.validate()
     return pattern
 

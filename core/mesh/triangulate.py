@@ -459,7 +459,7 @@ def _pattern_segments(pattern: CreasePattern, warnings: list[str]) -> _Segments:
     loops_ = edges[:, 0] == edges[:, 1]
     if loops_.any():
         raise PatternError(
-            f"triangulation: pattern edge {int(np.flatnonzero(loops_)[0])} starts and ends at one vertex"
+            f"triangulation: pattern edge {_named(pattern, np.flatnonzero(loops_)[0])} starts and ends at one vertex"
         )
     used = np.unique(edges)
     if len(used) < pattern.n_vertices:
@@ -475,7 +475,8 @@ def _pattern_segments(pattern: CreasePattern, warnings: list[str]) -> _Segments:
     segment_of: dict[tuple[int, int], int] = {}
     for k, (i, j) in enumerate(key.tolist()):
         if (i, j) in segment_of:
-            raise PatternError(f"triangulation: pattern edges {segment_of[(i, j)]} and {k} join the same two vertices")
+            both = f"{_named(pattern, segment_of[(i, j)])} and {_named(pattern, k)}"
+            raise PatternError(f"triangulation: pattern edges {both} join the same two vertices")
         segment_of[(i, j)] = k
     if len(pts) < 3 or np.all(np.abs(orient(pts[0], pts[1], pts[2:])) <= 1e-12 * pattern.size**2):
         if not np.any(pattern.assignments == "B"):
@@ -512,6 +513,14 @@ def _triangulate_hull(pattern: CreasePattern, sg: _Segments, backend: str) -> np
     return _canonical_triangles(tris)
 
 
+def _named(pattern: CreasePattern, k: int) -> str:
+    """Pattern edge ``k`` for a message, with the stroke or file edge it came from (a FOLD file's edges are
+    renumbered where its dense polylines were thinned, so the index alone may not be the file's)."""
+    k = int(k)
+    src = int(pattern.edge_polyline[k]) if k < len(pattern.edge_polyline) else -1
+    return f"{k} ({pattern.sources[src] if 0 <= src < len(pattern.sources) else 'no source'})"
+
+
 def _check_constraints(
     pattern: CreasePattern, sg: _Segments, seg_code: np.ndarray, org: np.ndarray, dst: np.ndarray
 ) -> None:
@@ -520,10 +529,8 @@ def _check_constraints(
     present = np.isin(seg_code, np.minimum(org, dst) * n_pts + np.maximum(org, dst))
     if not present.all():
         i, j = divmod(int(seg_code[np.flatnonzero(~present)[0]]), int(n_pts))
-        k = sg.segment_of[(i, j)]
-        where = pattern.sources[pattern.edge_polyline[k]] if pattern.sources else "no source"
         raise PatternError(
-            f"triangulation: pattern edge {k} ({where})"
+            f"triangulation: pattern edge {_named(pattern, sg.segment_of[(i, j)])}"
             " is not an edge of the triangulation: it overlaps another segment or passes through a vertex"
         )
 

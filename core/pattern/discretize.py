@@ -539,12 +539,55 @@ def _pattern_sheet_size(pattern: CreasePattern) -> float:
     return float(np.max(np.ptp(pts, axis=0))) if len(pts) else 0.0
 
 
+def with_thinned_polylines(
+    pattern: CreasePattern, interval: float | None = None, tolerance: float | None = None
+) -> CreasePattern:
+    """``pattern`` with its chains of segments sampled far finer than the interval thinned to the paper's sampling,
+    as a drawing's dense polylines are (:func:`.polylines.thin_dense_polylines`: chords up to ``interval`` that keep
+    every skipped vertex within ``tolerance``; ends, junctions and changes of role or angle stay; facet lines are
+    kept as drawn), for crease patterns read as straight segments: a FOLD file from another tool stores a curve as
+    a polyline of its own sampling, and kept point for point, 200 points to a 50 mm curve fanned 20 mm triangles
+    onto 0.5 mm pieces (495 corners under 1° where its SVG twin has none; a 1 m CAD sheet: 10,052 faces, 6.7 s,
+    against 202 faces). ``interval`` and ``tolerance`` default to the paper's, scaled to the sheet. A chord keeps
+    the source of the first segment it replaces, so messages name the file's edge where it starts."""
+    size = _pattern_sheet_size(pattern)
+    if not (size > 0 and math.isfinite(size)):
+        return pattern
+    d_interval, d_tolerance, _ = default_parameters(size)
+    interval = d_interval if interval is None else interval
+    tolerance = d_tolerance if tolerance is None else tolerance
+    kept, chords, source = thin_dense_polylines(
+        pattern.vertices,
+        pattern.edges,
+        pattern.assignments,
+        pattern.fold_angles,
+        pattern.assignments != "F",
+        interval,
+        tolerance,
+    )
+    if len(chords) == 0:
+        return pattern
+    attrs = np.concatenate([np.flatnonzero(kept), source])
+    edges = np.concatenate([pattern.edges[kept], chords])
+    used = np.unique(edges)
+    remap = np.full(pattern.n_vertices, -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return replace(
+        pattern,
+        vertices=pattern.vertices[used],
+        edges=remap[edges],
+        assignments=pattern.assignments[attrs],
+        fold_angles=pattern.fold_angles[attrs],
+        edge_polyline=pattern.edge_polyline[attrs],
+        edge_from_curve=pattern.edge_from_curve[attrs],
+    )
+
+
 def with_flattened_curves(pattern: CreasePattern, tolerance: float | None = None) -> CreasePattern:
     """``pattern`` with the chains of its segments that follow a curve marked as curve pieces
     (:func:`.polylines.flattened_curves`), for crease patterns read as straight segments (a FOLD file from another
     tool). ``tolerance`` defaults to the paper's, scaled to the sheet (:func:`default_parameters` of the largest
-    extent of the border, or of every vertex if there is none). A FOLD file's segments are kept as they are (not
-    thinned as a drawing's dense polylines are: its edges are named by index)."""
+    extent of the border, or of every vertex if there is none)."""
     if tolerance is None:
         size = _pattern_sheet_size(pattern)
         if not (size > 0 and math.isfinite(size)):

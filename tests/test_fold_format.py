@@ -347,3 +347,32 @@ def test_atomic_writes_get_ordinary_file_modes(tmp_path: Path) -> None:
         assert stat.S_IMODE(kept.stat().st_mode) == 0o640
     finally:
         os.umask(old)
+
+
+@pytest.mark.parametrize(
+    ("unit", "size", "said"),
+    [
+        (None, 1.0, "no frame_unit (unitless coordinates, read as millimetres): the sheet is 1 mm across"),
+        ("unit", 1.0, 'frame_unit "unit" (unitless coordinates, read as millimetres): the sheet is 1 mm across'),
+        (None, 400.0, None),  # ORIPA's 400-unit square: a sheet of a real size
+        ("mm", 1.0, None),  # a millimetre sheet, said so
+    ],
+)
+def test_a_unitless_unit_square_is_said_to_be_read_as_millimetres(unit, size, said) -> None:
+    """Rabbit Ear and the FOLD spec's examples draw a unit square without a unit: read as millimetres it folded
+    silently into a 1 mm model (a designer session's 0.7 mm STL, fifteenth pass). A unitless sheet under 10 mm is
+    now said to be one; a unitless sheet of a real size, or a unit given, is read as before."""
+    doc = {
+        "vertices_coords": [[0, 0], [size, 0], [size, size], [0, size]],
+        "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]],
+        "edges_assignment": ["B", "B", "B", "B", "V"],
+        "edges_foldAngle": [0, 0, 0, 0, 90],
+    }
+    if unit is not None:
+        doc["frame_unit"] = unit
+    warnings = [w for w in parse_fold(json.dumps(doc), "sq.fold").warnings if "unitless" in w]
+    assert warnings == (
+        []
+        if said is None
+        else [f"sq.fold: {said}; scale the file for a real size (the folded shape is the same at any size)"]
+    )

@@ -36,6 +36,11 @@ from .fold_validate import load_fold_json
 UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "pt": 25.4 / 72.0, "um": 1e-3, "nm": 1e-6, "unit": 1.0}
 """Millimetres per FOLD ``frame_unit``; ``unit`` (unitless, the FOLD default) is taken as millimetres."""
 
+UNITLESS_SMALL_MM = 10.0
+"""A unitless file (``frame_unit`` ``unit`` or none) whose sheet, read as millimetres, is smaller than this gets a
+warning: Rabbit Ear and the FOLD spec's examples draw a unit square, which folded silently into a 1 mm model (a
+0.7 mm STL; a designer session, fifteenth pass)."""
+
 FOLD_ASSIGNMENTS = (*ASSIGNMENTS, "J")
 """Assignments a FOLD file may carry: ours plus FOLD 1.2's ``J`` (join: an edge drawn only for modelling, e.g. a
 triangulation diagonal; the faces on both sides are one face, so :func:`fold_to_pattern` drops it)."""
@@ -166,6 +171,12 @@ def parse_fold(text: str, source_name: str = "<fold>") -> FoldDocument:
         if short is not None:  # a polygon has three corners at least (an empty face broke the cut detection)
             raise _fail(src, f"faces_vertices[{short}] = {faces[short]!r}: a face needs at least 3 vertices")
     extent = float(np.max(np.ptp(coords, axis=0))) if n else 0.0
+    if unit == "unit" and 0.0 < extent < UNITLESS_SMALL_MM:
+        given = 'frame_unit "unit"' if "frame_unit" in data else "no frame_unit"
+        warnings.append(
+            f"{src}: {given} (unitless coordinates, read as millimetres): the sheet is {extent:.3g} mm across; "
+            "scale the file for a real size (the folded shape is the same at any size)"
+        )
     flat_key = PREFIX + "flat_coords"
     frames: list[np.ndarray] = []
     frame_angles: list[np.ndarray | None] = []

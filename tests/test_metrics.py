@@ -190,6 +190,19 @@ def test_verdict_on_given_angles_names_flat_and_wrong_way_creases_by_length() ->
     assert "fold less than half" in v["does_not_fold_message"] and "stay flat" not in v["does_not_fold_message"]
     flat[arc2] = theta[arc2] * 0.55  # over half: folded, although the mean error is large
     assert verdict(mesh, flat, 1.0)["does_not_fold_as_assigned"] is False
+    # three quarters of it at a fifth, the rest at its target: the message gives the angle of the part that does not
+    # fold, since the crease's mean (two fifths) is near half and read as if it folded (a designer session)
+    pieces = np.flatnonzero(arc2)
+    flat[pieces] = theta[pieces]
+    flat[pieces[: 3 * len(pieces) // 4]] *= 0.2
+    v = verdict(mesh, flat, 1.0)
+    bad = v["creases_not_folding"][0]
+    target = bad["target_deg"]
+    assert bad["not_folding_angle_deg"] == pytest.approx(0.2 * target, rel=1e-6) and bad["flat_mm"] < length
+    assert (
+        f"(folded {0.2 * target:.0f}° there, {bad['angle_deg']:.0f}° on average over the crease, for "
+        in (v["does_not_fold_message"])
+    )
 
 
 def test_verdict_caps_targets_near_180_degrees() -> None:

@@ -92,7 +92,8 @@ def crease_pieces(mesh: FoldMesh, fold_angles: np.ndarray, percent: float) -> di
 def creases_not_folding(mesh: FoldMesh, fold_angles: np.ndarray, percent: float) -> list[dict[str, Any]]:
     """The drawn creases (polylines) that do not fold (see the module docstring), longest not-folding length first,
     as JSON-ready dicts: ``crease`` (its source), ``polyline``, ``length_mm``, ``flat_mm``, ``wrong_way_mm``,
-    ``angle_deg`` (length-weighted mean simulated angle), ``target_deg`` (× percent) and ``at_mm`` [x, y]."""
+    ``angle_deg`` (length-weighted mean simulated angle), ``not_folding_angle_deg`` (the same over the pieces that
+    do not fold), ``target_deg`` (× percent) and ``at_mm`` [x, y]."""
     pcs = crease_pieces(mesh, fold_angles, percent)
     if percent <= 0 or len(pcs["edge"]) == 0:
         return []
@@ -111,6 +112,7 @@ def creases_not_folding(mesh: FoldMesh, fold_angles: np.ndarray, percent: float)
     for k in np.flatnonzero(bad).tolist():
         pieces = (inv == k) & (pcs["flat"] | pcs["wrong_way"])
         corner = float(beside[pieces].min())
+        low = float(np.average(pcs["angle"][pieces], weights=length[pieces]))
         centre = np.average(mid[pieces], axis=0, weights=length[pieces])
         at = mid[pieces][np.argmin(np.linalg.norm(mid[pieces] - centre, axis=1))]  # a point on the crease itself
         p = int(ids[k])
@@ -123,6 +125,7 @@ def creases_not_folding(mesh: FoldMesh, fold_angles: np.ndarray, percent: float)
                 "flat_mm": float(flat_len[k]),
                 "wrong_way_mm": float(wrong_len[k]),
                 "angle_deg": float(mean_angle[k]),
+                "not_folding_angle_deg": low,
                 "target_deg": float(mean_target[k]),
                 "at_mm": [float(at[0]), float(at[1])],
                 "smallest_corner_deg": corner,
@@ -213,8 +216,13 @@ def _describe(c: dict[str, Any], percent: float, mesh_type: str) -> str:
         corner = c["smallest_corner_deg"]
         better = "the ruling-aware mesh" if mesh_type == "earcut" else "a smaller interval"
         hint = f"; its triangles have corners down to {corner:.2f}° ({better} may mesh it better)"
+    # where part of the crease folds, its mean angle can pass the mark: give the angle of the part that does not
+    # (a designer's "168.0 mm fold less than half (folded 42° for 72°)")
+    part = c["flat_mm"] + c["wrong_way_mm"] < c["length_mm"] * (1 - 1e-9) and "not_folding_angle_deg" in c
+    mean = f"{c['angle_deg']:.0f}°"
+    angle = f"{c['not_folding_angle_deg']:.0f}° there, {mean} on average over the crease," if part else mean
     return (
-        f"{c['crease']}: of its {c['length_mm']:.1f} mm, {' and '.join(how)} (folded {c['angle_deg']:.0f}° for "
+        f"{c['crease']}: of its {c['length_mm']:.1f} mm, {' and '.join(how)} (folded {angle} for "
         f"{c['target_deg']:.0f}°), around ({c['at_mm'][0]:.1f}, {c['at_mm'][1]:.1f}) mm{hint}"
     )
 

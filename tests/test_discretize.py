@@ -473,6 +473,54 @@ def test_curve_samples_a_hair_from_a_junction_are_removed_within_tolerance(monke
         assert d <= tolerance
 
 
+def test_a_crease_sample_beside_its_crossing_with_a_curved_border_is_removed_too() -> None:
+    """A crease crossing a curved (heart-shaped) border: the border's sample beside the crossing was removed, and
+    then no other at that junction, so the crease kept a 0.073 mm stub (a designer session's drawing at a 3 mm
+    interval, fifteenth pass), and a 0.97° corner. One sample per drawn curve may now go at a junction, each in its
+    own sector."""
+    from curved_fold.core.mesh.build import build_mesh
+    from curved_fold.core.mesh.fold_mesh import corner_angles
+
+    svg = (
+        '<svg xmlns="http://www.w3.org/2000/svg" width="150mm" height="150mm" viewBox="0 0 150 150">'
+        '<path id="heart" d="M 75 140 C 20 100 0 60 20 30 C 35 5 65 10 75 35 C 85 10 115 5 130 30 C 150 60 130 100 '
+        '75 140 Z" fill="none" stroke="#000000"/>'
+        '<path id="c0" d="M 57 0 C 45.2 50 67 90 60.6 150" fill="none" stroke="#ff0000" stroke-opacity="0.5"/></svg>'
+    )
+    pattern = discretize(parse_svg_text(svg, "heart.svg").curves, interval=3.0)
+    e = pattern.edges
+    length = np.hypot(*(pattern.vertices[e[:, 1]] - pattern.vertices[e[:, 0]]).T)
+    assert length.min() > 1.0  # the stub is gone (and the border's pieces are 1.5 mm)
+    mesh = build_mesh(pattern)
+    assert corner_angles(mesh.vertices, mesh.triangles).min() > 1.0
+
+
+def test_a_cusp_is_a_vertex_and_said_not_sampled_down_to_the_merge_tolerance() -> None:
+    """A cubic whose handles cross stops and turns back: a cusp (a designer session, fifteenth pass). A chord across
+    it strays from the curve in proportion to its length, so halving never met the tolerance: the curve was sampled
+    down to the merge tolerance there, the warning asked for a larger tolerance (which changed nothing) and 82 mm
+    triangles fanned onto the stretch (13 corners under 1°, down to 0.11°). The cusp is now a vertex, each side
+    sampled along its length, and a warning says where it is."""
+    from curved_fold.core.mesh.build import build_mesh
+    from curved_fold.core.mesh.fold_mesh import corner_angles
+
+    seg = CurveSegment("cubic", np.array([[20.0, 0.0], [140.0, -120.0], [20.0, -120.0], [140.0, 0.0]]))
+    t = curve_parameters(seg, 10.0, 0.075)
+    assert np.any(np.abs(t - 0.5) < 1e-9)  # the cusp, at t = 1/2 (B′(½) = 0)
+    chords = np.hypot(*np.diff(seg.evaluate(t), axis=0).T)
+    assert chords.min() > 1.0 and chords.max() <= 10.0
+    svg = (
+        '<svg xmlns="http://www.w3.org/2000/svg" width="160mm" height="160mm" viewBox="0 0 160 160">'
+        '<rect x="0" y="0" width="160" height="160" fill="none" stroke="#000000"/>'
+        '<path id="cusp" d="M 20 0 C 140 120 20 120 140 0" fill="none" stroke="#0000ff" stroke-opacity="0.5"/></svg>'
+    )
+    pattern = discretize(parse_svg_text(svg, "cusp.svg").curves)
+    assert not any("merge tolerance" in w for w in pattern.warnings)
+    assert any("<path id='cusp'> (line 1) has a cusp at (80.0, -90.0) mm" in w for w in pattern.warnings)
+    mesh = build_mesh(pattern)
+    assert corner_angles(mesh.vertices, mesh.triangles).min() > 1.0
+
+
 # ------------------------------------------------------------------------------------------------ flattened curves
 
 

@@ -147,13 +147,82 @@ def _estimate_pieces(seg: CurveSegment, interval: float, tolerance: float) -> fl
     return max(length / interval, by_tol, 1.0)
 
 
+CUSP_SPEED = 1e-3
+"""An interior point of a cubic where its speed |B′(t)| falls under this fraction of its fastest is a cusp (the
+handles crossed: the curve stops and turns back) and a vertex of its polyline (:func:`_cusp_parameters`)."""
+
+
+def _cusp_parameters(seg: CurveSegment) -> list[float]:
+    """Interior parameters of ``seg``'s cusps (only a cubic has them): where its speed has a local minimum under
+    :data:`CUSP_SPEED` of its fastest, found on 256 steps and polished by ternary search on |B′|²."""
+    if seg.kind != "cubic":
+        return []
+    p = seg.points
+    d0, d1, d2 = p[1] - p[0], p[2] - p[1], p[3] - p[2]
+
+    def speed2(t: np.ndarray) -> np.ndarray:
+        s = 1.0 - t[:, None]
+        v = s * s * d0 + 2.0 * s * t[:, None] * d1 + t[:, None] * t[:, None] * d2
+        return np.einsum("ij,ij->i", v, v)
+
+    t = np.linspace(0.0, 1.0, 257)
+    v = speed2(t)
+    low = np.flatnonzero((v[1:-1] <= v[:-2]) & (v[1:-1] < v[2:]) & (v[1:-1] < CUSP_SPEED**2 * v.max())) + 1
+    out = []
+    for i in low.tolist():
+        a, b = t[i - 1], t[i + 1]
+        for _ in range(60):
+            m1, m2 = a + (b - a) / 3.0, b - (b - a) / 3.0
+            a, b = (a, m2) if speed2(np.array([m1]))[0] <= speed2(np.array([m2]))[0] else (m1, b)
+        out.append(0.5 * (a + b))
+    return out
+
+
+@dataclass(frozen=True)
+class _Part:
+    """The part ``lo``–``hi`` of a cubic's parameter range as a segment of its own (parameter ``u`` 0–1), the side
+    of a cusp: ``t = lo + (hi − lo)·√u`` from a cusp at ``lo`` (``hi − (hi − lo)·√(1 − u)`` to one at ``hi``), since
+    the curve leaves a cusp as (t − c)²: equal steps of ``u`` are then about equal steps along it, where equal steps
+    of ``t`` crowded the cusp with 0.14 mm chords."""
+
+    seg: CurveSegment
+    lo: float
+    hi: float
+    cusp_at_lo: bool
+    kind: str = "part"  # a curve piece without cusps inside: not split again
+
+    def parameter(self, u: np.ndarray) -> np.ndarray:
+        u = np.asarray(u, dtype=float)
+        if self.cusp_at_lo:
+            return self.lo + (self.hi - self.lo) * np.sqrt(u)
+        return self.hi - (self.hi - self.lo) * np.sqrt(1.0 - u)
+
+    def evaluate(self, u: np.ndarray | float) -> np.ndarray:
+        return self.seg.evaluate(self.parameter(np.asarray(u, dtype=float)))
+
+
 def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budget: int = MAX_SEGMENTS) -> np.ndarray:
     """Parameters of the polyline vertices of one curved segment (paper §3.1), sorted, starting 0 and ending 1.
 
     Equal parameter steps with the smallest count whose chords are all ≤ ``interval``, then repeated insertion of
     the parameter midpoint of every chord whose curve midpoint is farther than ``tolerance`` from it. Stops early
-    (returning what it has) if the count would exceed ``budget``.
+    (returning what it has) if the count would exceed ``budget``. A cubic's cusps are vertices, each side sampled
+    on its own: a chord across a cusp strays from the curve in proportion to its length, so halving it never met
+    the tolerance, and the curve was sampled down to the merge tolerance there (a designer session's cusp: the
+    warning asked for a larger tolerance, which changed nothing, and 82 mm triangles fanned onto the 1 mm stretch).
     """
+    cusps = _cusp_parameters(seg)
+    if cusps:
+        # each part with one cusp end: between two cusps (a tiny loop), split at the middle
+        sides = [(0.0, cusps[0], False)]
+        for a, b in zip(cusps[:-1], cusps[1:], strict=True):
+            sides += [(a, 0.5 * (a + b), True), (0.5 * (a + b), b, False)]
+        sides.append((cusps[-1], 1.0, True))
+        parts = []
+        for lo, hi, at_lo in sides:
+            part = _Part(seg, lo, hi, cusp_at_lo=at_lo)
+            parts.append(part.parameter(curve_parameters(part, interval, tolerance, budget)[:-1]))  # type: ignore[arg-type]
+        return np.concatenate([*parts, [1.0]])
     length = _segment_length(seg)
     n = max(1, math.ceil(length / interval))
     tries = 0
@@ -674,12 +743,13 @@ def _drop_samples_beside_junctions(
                 inc.setdefault(v, []).append(k)
     drop = np.zeros(len(edges), dtype=bool)
     new_edges = edges.copy()
-    touched: set[int] = set()
+    touched: set[int] = set()  # samples and far ends of removals made: not moved again
+    sectors: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}  # per junction, its removals' curve and sector
     removed = 0
     for k in np.flatnonzero(short).tolist():
         a, b = edges[k].tolist()
         for junction, sample in ((a, b), (b, a)):
-            if deg[junction] == 2 or deg[sample] != 2 or {junction, sample} & touched:
+            if deg[junction] == 2 or deg[sample] != 2 or sample in touched or junction in touched - sectors.keys():
                 continue
             k2 = next(x for x in inc[sample] if x != k)
             w = int(edges[k2, 0] if edges[k2, 1] == sample else edges[k2, 1])
@@ -703,12 +773,33 @@ def _drop_samples_beside_junctions(
             inside[[junction, sample, w]] = False
             if inside.any():
                 continue
+            # another curve through the junction (a crease crossing a curved border: the border's sample beside
+            # the crossing went first, and a designer's 0.07 mm stub of the crease stayed): one sample per drawn
+            # curve (both of a circle's beside a ray's end made its arc coarser there: rays on a 20 mm circle missed
+            # their angles by 9° more), its triangle clear of any swept from the junction already
+            line = int(pieces.polyline[attrs[k]])
+            if any(ln == line or _sectors_overlap(pb - pa, pw - pa, u, v) for ln, u, v in sectors.get(junction, ())):
+                continue
             new_edges[k] = (junction, w)
             drop[k2] = True
-            touched.update((junction, sample, w))
+            touched.update((sample, w))
+            touched.add(junction)
+            sectors.setdefault(junction, []).append((line, pb - pa, pw - pa))
             removed += 1
             break
     return new_edges[~drop], attrs[~drop], removed
+
+
+def _sectors_overlap(p: np.ndarray, q: np.ndarray, u: np.ndarray, v: np.ndarray) -> bool:
+    """Whether the angular sectors between the directions ``p``, ``q`` and between ``u``, ``v`` (each under 180°,
+    from one vertex) share more than a boundary direction (two equal sectors would be two curves on top of each
+    other, which the planar clean-up has removed)."""
+
+    def within(d: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
+        turn = float(_cross(a[None], b[None])[0])
+        return turn * float(_cross(a[None], d[None])[0]) > 0 and turn * float(_cross(d[None], b[None])[0]) > 0
+
+    return within(u, p, q) or within(v, p, q) or within(p, u, v) or within(q, u, v)
 
 
 def _inside_border(points: np.ndarray, border_a: np.ndarray, border_b: np.ndarray) -> np.ndarray:
@@ -911,6 +1002,7 @@ def _discretise_curves(
     total = 0
     hit_budget = False
     below_merge: list[int] = []  # curves whose chords had to be shorter than the merge tolerance
+    cusps: list[tuple[int, np.ndarray]] = []  # (curve, point) of each cusp: a vertex of its polyline
     for k in order:
         c = curves[k]
         if c.assignment not in PRIORITY:
@@ -927,6 +1019,7 @@ def _discretise_curves(
                     hit_budget = True
                 if n > 1 and float(np.hypot(*np.diff(pts, axis=0).T).min()) < merge_tolerance:
                     below_merge.append(k)
+                cusps += [(k, seg.evaluate(t)) for t in _cusp_parameters(seg)]
             points.append(pts)
             owner.append(k)
             curved_flags.append(curved)
@@ -945,6 +1038,12 @@ def _discretise_curves(
             f"tolerance {tolerance:g} mm needs curve chords shorter than the merge tolerance {merge_tolerance:g} mm "
             f"on {_describe_sources(sources, np.array(below_merge))}: points closer than that are merged, so those "
             "curves are followed less closely than asked; pass a larger --tolerance"
+        )
+    if cusps:
+        (k, at), more = cusps[0], f" and {len(cusps) - 1} more" if len(cusps) > 1 else ""
+        warnings.append(
+            f"{sources[k]} has a cusp at ({at[0]:.1f}, {at[1]:.1f}) mm{more}: the curve stops and turns back there "
+            "(its handles cross); it is folded as a corner of the crease. Move a handle if the point is not meant"
         )
     edge_poly = np.repeat(np.array(owner, dtype=np.int64), counts)
     assignment = np.array([c.assignment for c in curves], dtype="<U1")

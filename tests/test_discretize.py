@@ -382,6 +382,12 @@ def _cross2(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 @example(lines=[(0.001, 0, 0, 0), (0, 0, 1, 1), (0, 1, 0, -1)])
 # a crossing inside one segment a merge tolerance from the other's end, that end as far from the first's
 @example(lines=[(0.0, 0.0, 1.0, 1.0), (1.0, 0.0, 0.0, 0.001)])
+# a crossing within a merge tolerance of an end of each segment, those ends a merge tolerance apart: snap it to one
+@example(lines=[(1.0, 0.0, 0.001, 0.002), (0.0, 0.0, 0.002, 0.002)])
+# a free end 0.001 from a junction, drawn on to the stroke its continuation hits: it would pass 1e-4 from the junction
+@example(lines=[(-100.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, -100.0), (1.0, 0.0005, 0.001, 0.0001)])
+# a free end drawn on to the end of the piece it hits: the piece to that end (not to the hit) crosses a third stroke
+@example(lines=[(0.0, 100.0, 0.0, 0.0), (1.0, 0.002, -100.0, 1.0), (0.0, 0.001, 0.5, 0.002), (0.0, -1.0, 0.999, 0.002)])
 def test_random_segments_become_a_planar_graph(lines) -> None:
     """After the clean-up no two segments cross or overlap, and no vertex lies inside another segment."""
     curves = [

@@ -13,18 +13,19 @@ Steps, in order:
 3. **Planar arrangement.** Vertices closer than ``merge_tolerance`` are merged (into the first representative, as
    Origami Simulator does; border vertices come first so the outline never moves); crossing segments (X) and
    endpoints lying on another segment (T) are split at the intersection (a computed crossing within
-   :data:`SNAP_FACTOR` merge tolerances of an existing vertex snaps to it; one inside a segment but within the merge
-   tolerance of the other's end splits the first at that end); zero-length and duplicate segments are
-   removed. Candidate pairs come from a uniform grid over the segments' bounding boxes, so the work grows with the
-   number of nearby pairs, not with E².
+   :data:`SNAP_FACTOR` merge tolerances of an existing vertex snaps to it, as does one within the merge tolerance of
+   an end of each; one inside a segment but within the merge tolerance of the other's end splits the first at that
+   end); zero-length and duplicate segments are removed. Candidate pairs come from a uniform grid over the segments'
+   bounding boxes, so the work grows with the number of nearby pairs, not with E².
 4. **Outside pieces.** Border pieces that are no part of an outline (a black slit from the edge, a black line
    across or loose inside the sheet) are read as cuts, with a warning naming them (:func:`_stray_border_as_cuts`).
    If the border is then closed, crease pieces lying outside it (creases drawn slightly past the
    edge of the sheet) are removed, with a warning; a crossing on the border never snaps to a vertex off it, so the
    outline stays where it was drawn. Free ends of creases (not cuts) that stop just short of the border
    (:data:`SHORT_OF_BORDER_FRACTION`) are moved onto it, with a warning (:func:`_snap_short_ends`); crease ends
-   that stop as short (of the sheet's width) of another stroke ahead of them are drawn on to it, and pieces drawn as
-   far past a crossing to a free end are removed (:func:`_join_near_misses`).
+   that stop as short (of the sheet's width) of another stroke ahead of them are drawn on to it (unless the piece
+   drawn on would cross a stroke or pass within the merge tolerance of a vertex: :func:`_join_tangles`), and pieces
+   drawn as far past a crossing to a free end are removed (:func:`_join_near_misses`).
 5. **Samples beside junctions.** A curve sample point left a small fraction of a chord from a crossing or T-junction
    on its curve is removed where the curve stays within ``tolerance`` of the new chord (the short piece would force
    sliver triangles; :func:`_drop_samples_beside_junctions`).
@@ -446,7 +447,14 @@ def _split_records(
     in_b = hit & (db > tol) & (db < lb - tol) & ~shared
     with np.errstate(invalid="ignore"):
         x = p + t[:, None] * r
-    both = in_a & in_b
+    # A proper crossing within tol of an end of each segment passes the X test for neither and the T test below for
+    # neither end (each projects within tol of the other segment's end), yet those ends are at least tol apart (or
+    # they would have been merged): (1,0)–(0.001,0.002) crossed (0,0)–(0.002,0.002) for good. It is an X crossing
+    # next to an existing vertex (one of those ends, or a vertex nearer still), so it snaps to it as below: the
+    # segment that does not end there is split there.
+    with np.errstate(invalid="ignore"):
+        corner = hit & ~in_a & ~in_b & ~shared & (t > 0) & (t < 1) & (u > 0) & (u < 1)
+    both = (in_a & in_b) | corner
     k = int(both.sum())
     if k:
         # A computed crossing next to an existing vertex (lines drawn "through" a junction that miss it by a
@@ -1412,15 +1420,24 @@ class _EndMover:
     def n_edges(self) -> int:
         return len(self.edges) + len(self.extra_edges)
 
+    def destination(self, target_edge: int, foot: np.ndarray, snap: float = 0.0) -> tuple[int, np.ndarray]:
+        """Where :meth:`move` puts an end aimed at ``foot`` on edge ``target_edge``: ``(vertex, point)``, the end of
+        that edge within ``snap`` (at least the merge tolerance) of ``foot``, else ``(-1, foot)`` (a new vertex)."""
+        (ends,), _ = self.rows([target_edge])
+        at = self.points(ends)
+        near = np.hypot(*(at - foot).T)
+        k = int(np.argmin(near))
+        if near[k] <= max(self.merge_tolerance, snap):
+            return int(ends[k]), at[k]
+        return -1, foot
+
     def move(self, w: int, side: int, target_edge: int, foot: np.ndarray, snap: float = 0.0) -> bool:
         """End ``side`` of edge ``w`` onto ``foot``, a point of edge ``target_edge`` (an index into
-        :meth:`current`), or onto an end of that edge within ``snap`` (at least the merge tolerance) of it; False
-        when that would collapse ``w``."""
+        :meth:`current`), or onto an end of that edge within ``snap`` (at least the merge tolerance) of it
+        (:meth:`destination`); False when that would collapse ``w``."""
         (ends,), (attr,) = self.rows([target_edge])
-        near = np.hypot(*(self.points(ends) - foot).T)
-        if near.min() <= max(self.merge_tolerance, snap):
-            target = int(ends[int(np.argmin(near))])
-        else:  # split the target piece at the foot
+        target, _ = self.destination(target_edge, foot, snap)
+        if target < 0:  # split the target piece at the foot
             target = len(self.verts) + len(self.new_verts)
             self.new_verts.append(foot)
             if target_edge < len(self.edges):
@@ -1519,16 +1536,47 @@ def _sheet_width(verts: np.ndarray, edges: np.ndarray, assign: np.ndarray, size:
     return width if width > 0 else size
 
 
-def _crosses_any(p: np.ndarray, q: np.ndarray, pts: np.ndarray, edges: np.ndarray, vertex: int, edge: int) -> bool:
-    """Whether segment ``p → q`` properly crosses an edge other than ``edge`` and those at ``vertex``."""
-    keep = ~np.any(edges == vertex, axis=1)
-    keep[edge] = False
-    a, b = pts[edges[keep, 0]], pts[edges[keep, 1]]
-    r, s = np.broadcast_to(q - p, a.shape), b - a
+def _join_tangles(
+    pts: np.ndarray,
+    edges: np.ndarray,
+    obstacle: np.ndarray,
+    piece: tuple[int, int],
+    onto: tuple[int, int],
+    at: np.ndarray,
+    tol: float,
+) -> bool:
+    """Whether drawing a free end on leaves what the planar clean-up (step 3) would have split. The piece runs from
+    vertex ``back`` to ``at`` (``piece = (back, tip)``: ``tip`` is the free end it leaves), a point of edge ``target``
+    (``onto = (target, dest)``: ``dest`` the vertex at ``at``, or -1 for a new one that splits ``target``); the
+    ``obstacle`` edges (bool per edge) are the others that stay. True if the piece properly crosses an obstacle
+    that does not end at ``back`` or ``dest``, or passes within ``tol`` of a vertex (of an obstacle or of
+    ``target``), or its new vertex lies within ``tol`` of an obstacle.
+
+    The clean-up is over by then, so such a join left two segments crossing, or a vertex inside a segment, for good:
+    an end aimed past a junction it misses by a hair was drawn on past it, or snapped onto the end of the piece it
+    hit and crossed a stroke at the junction (the crossing was tested on the way to the unsnapped point)."""
+    back, tip = piece
+    target, dest = onto
+    p = pts[back]
+    other = obstacle.copy()
+    other[target] = False
+    e = edges[other]
+    a, b = pts[e[:, 0]], pts[e[:, 1]]
+    apart = ~np.any((e == back) | (e == dest), axis=1)
+    r, s = np.broadcast_to(at - p, a.shape), b - a
     d1, d2 = _cross(r, a - p), _cross(r, b - p)
-    d3, d4 = _cross(s, p - a), _cross(s, q - a)
-    scale = float(np.hypot(*(q - p))) * np.hypot(*s.T) * 1e-12
-    return bool(np.any((d1 * d2 < -(scale**2)) & (d3 * d4 < -(scale**2))))
+    d3, d4 = _cross(s, p - a), _cross(s, at - a)
+    scale = float(np.hypot(*(at - p))) * np.hypot(*s.T) * 1e-12
+    if np.any(apart & (d1 * d2 < -(scale**2)) & (d3 * d4 < -(scale**2))):
+        return True
+    near = np.zeros(len(pts), dtype=bool)
+    near[e] = True
+    near[edges[target]] = True
+    near[[back, tip, dest] if dest >= 0 else [back, tip]] = False
+    ends = np.broadcast_to(p, (int(near.sum()), 2)), np.broadcast_to(at, (int(near.sum()), 2))
+    if np.any(point_segment_distance(pts[near], *ends) < tol):
+        return True
+    return dest < 0 and bool(np.any(point_segment_distance(np.broadcast_to(at, a.shape), a, b) < tol))
 
 
 def _join_near_misses(
@@ -1646,6 +1694,7 @@ def _join_near_misses(
     candidate_end = near_end[ok][order]
     first = np.r_[True, candidate_end[1:] != candidate_end[:-1]] if len(candidate_end) else np.zeros(0, bool)
     split: set[int] = set()
+    stubs = which[stub]
 
     def target_ok_now(idx: np.ndarray, stroke_attrs: np.ndarray) -> np.ndarray:
         """:data:`target_ok` for pieces of :meth:`_EndMover.current` (added halves: by their stroke's role)."""
@@ -1675,8 +1724,12 @@ def _join_near_misses(
             best = int(np.flatnonzero(ok2)[np.lexsort((d2[ok2], e2[ok2]))[0]])
             target, at, gap = int(pieces_now[best]), f2[best], float(d2[best])
         pts, all_e, _ = mover.current()
-        if _crosses_any(backs[k], at, pts, all_e, back_v, target):
-            continue  # the end moved there would cross another stroke: the drawing stays as it is
+        dest_v, dest = mover.destination(target, at, snap=0.25 * gap)
+        obstacle = np.ones(len(all_e), dtype=bool)
+        obstacle[stubs] = False  # about to be removed
+        obstacle[w] = False
+        if _join_tangles(pts, all_e, obstacle, (back_v, tip_v), (target, dest_v), dest, merge_tolerance):
+            continue  # the end moved there would cross another stroke or touch it: the drawing stays as it is
         n_before = mover.n_edges()
         on_the_curve = bool(pieces.from_curve[mover.rows([target])[1][0]]) and gap <= merge_tolerance + chord_tolerance
         if mover.move(w, side, target, at, snap=0.25 * gap):

@@ -4,6 +4,7 @@ coincident vertices (the FOLD library's own ``diagonal-folded.fold``) refused wi
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -233,7 +234,7 @@ def test_another_tools_dense_polylines_are_thinned_as_a_drawings(tmp_path: Path)
     path.write_text(json.dumps(doc))
     svg = tmp_path / "cad.svg"
     lines = "".join(
-        f'<polyline points="{" ".join(f"{x!r},{-y!r}" for x, y in pts)}" fill="none" '
+        f'<polyline points="{" ".join(f"{float(x)!r},{-float(y)!r}" for x, y in pts)}" fill="none" '
         f'stroke="{"#ff0000" if k % 2 else "#0000ff"}" opacity="0.5"/>'
         for k, pts in enumerate(polylines)
     )
@@ -247,6 +248,52 @@ def test_another_tools_dense_polylines_are_thinned_as_a_drawings(tmp_path: Path)
     creases = read_pattern(path)
     named = {creases.sources[k] for k in creases.edge_polyline[creases.assignments == "M"]}
     assert named and all(name.startswith("cad.fold edge ") for name in named)
+
+
+def _dense_fold(tmp_path: Path, name: str, extra: list[tuple[list[list[float]], str]], size: float = 100.0) -> Path:
+    """A ``size`` mm FOLD sheet (border as four edges) with the closed or open polylines ``extra`` ((points,
+    role))."""
+    coords = [[0.0, 0.0], [size, 0.0], [size, size], [0.0, size]]
+    edges, assign, angles = [[0, 1], [1, 2], [2, 3], [3, 0]], ["B"] * 4, [0.0] * 4
+    for pts, role in extra:
+        closed = pts[0] == pts[-1]
+        first = len(coords)
+        coords += pts[:-1] if closed else pts
+        n = len(pts) - 1
+        edges += [[first + i, first + (i + 1) % n if closed else first + i + 1] for i in range(n)]
+        assign += [role] * n
+        angles += [0.0 if role == "C" else 90.0] * n
+    path = tmp_path / name
+    doc = {"file_spec": 1.1, "frame_unit": "mm", "vertices_coords": coords, "edges_vertices": edges}
+    path.write_text(json.dumps(doc | {"edges_assignment": assign, "edges_foldAngle": angles}))
+    return path
+
+
+def test_another_tools_narrow_closed_loop_is_not_thinned_onto_itself(tmp_path: Path) -> None:
+    """A 6 × 0.1 mm slot drawn as a closed 120-point cut (a review session's laser-cut outline): thinned from its one
+    stop, its two long sides became chords between the same two vertices, and the fold stopped with "pattern edges
+    4 and 5 join the same two vertices". A loop keeps three vertices at least, and a chord keeps clear of the rest
+    of its own chain (the slot's far side)."""
+    t = np.linspace(0.0, 2.0 * np.pi, 121)
+    slot = [[75.0 + 3.0 * np.cos(a), 75.0 + 0.05 * np.sin(a)] for a in t[:-1]]
+    path = _dense_fold(tmp_path, "slot.fold", [(slot + [slot[0]], "C")], size=150.0)
+    report = fold_pattern(read_pattern(path)).report
+    assert report["converged"]
+
+
+def test_another_tools_file_is_thinned_at_the_interval_asked(tmp_path: Path) -> None:
+    """``--interval`` and ``--tolerance`` apply to another tool's FOLD file, as to a drawing: its dense polylines
+    are thinned at them (they were ignored, and the file thinned at the automatic interval; a review session), the
+    interval is the one its creases are split at beside needles, and a bad value is refused in one line."""
+    s = np.linspace(0.0, 1.0, 201)
+    sine = [[50.0 + 10.0 * np.sin(2 * np.pi * u), 100.0 * u] for u in s]
+    path = _dense_fold(tmp_path, "dense.fold", [(sine, "V")])
+    auto, fine = read_pattern(path), read_pattern(path, interval=3.0, tolerance=0.02)
+    assert math.isnan(auto.interval) and fine.interval == 3.0
+    creases = [int(np.count_nonzero(p.assignments == "V")) for p in (auto, fine)]
+    assert creases[0] < creases[1] < 200
+    with pytest.raises(PatternError, match="interval must be a positive number of mm, got -1.0"):
+        read_pattern(path, interval=-1.0)
 
 
 def test_another_tools_long_border_edges_are_split_as_a_drawings(tmp_path: Path) -> None:

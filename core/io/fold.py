@@ -28,7 +28,12 @@ from typing import Any
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh, corner_angles, polygon_sides
-from ..pattern.discretize import subdivide_straight_border, with_flattened_curves, with_thinned_polylines
+from ..pattern.discretize import (
+    segment_parameters,
+    subdivide_straight_border,
+    with_flattened_curves,
+    with_thinned_polylines,
+)
 from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
 from .atomic import atomic_write_text
 from .fold_validate import load_fold_json
@@ -464,22 +469,34 @@ def _interval(doc: FoldDocument, source: str) -> float:
     return float(value) * UNIT_MM.get(doc.unit, 1.0)
 
 
-def read_fold_pattern(path: str | os.PathLike[str]) -> CreasePattern:
+def read_fold_pattern(
+    path: str | os.PathLike[str], *, interval: float | None = None, tolerance: float | None = None
+) -> CreasePattern:
     """The crease pattern a fold of the FOLD file ``path`` starts from (:func:`pattern_for_folding`)."""
-    return pattern_for_folding(read_fold(path))
+    return pattern_for_folding(read_fold(path), interval=interval, tolerance=tolerance)
 
 
-def pattern_for_folding(doc: FoldDocument) -> CreasePattern:
+def pattern_for_folding(
+    doc: FoldDocument, *, interval: float | None = None, tolerance: float | None = None
+) -> CreasePattern:
     """The crease pattern a fold of ``doc`` starts from, the same through every door (command line, Blender
     import): :func:`fold_to_pattern` and, for another tool's file (no ``curved_fold:`` fields; ours keep the
     pieces they were discretised with and their curve flags), its polylines sampled far finer than the paper
     samples thinned, its straight border split into pieces and its chains of segments that follow a curve marked
     as curve pieces, as a drawing's are (:func:`..pattern.discretize.with_thinned_polylines`,
-    :func:`..pattern.discretize.subdivide_straight_border`, :func:`..pattern.discretize.with_flattened_curves`)."""
+    :func:`..pattern.discretize.subdivide_straight_border`, :func:`..pattern.discretize.with_flattened_curves`), at
+    ``interval`` and ``tolerance`` (mm; ``None``: the paper's, scaled to the sheet; the interval is also the one
+    long straight creases are split at beside needles). Our own files ignore them: they read back as written."""
     if PREFIX + "edge_polyline" in doc.data:
         return fold_to_pattern(doc)
     doc = _flat_foldable_angles(_without_sliver_facets(doc))
-    pattern = with_flattened_curves(subdivide_straight_border(with_thinned_polylines(fold_to_pattern(doc))))
+    pattern = fold_to_pattern(doc)
+    interval, tolerance, said = segment_parameters(pattern, interval, tolerance)
+    pattern = with_thinned_polylines(pattern, interval, tolerance)
+    pattern = with_flattened_curves(subdivide_straight_border(pattern, interval), tolerance)
+    if interval is not None:
+        pattern = replace(pattern, interval=interval)
+    pattern.warnings = [*pattern.warnings, *said]
     pattern.validate()
     return pattern
 

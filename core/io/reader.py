@@ -131,15 +131,17 @@ def read_pattern(
     """Read and discretise a crease pattern (.svg, .blend) or read a discretised one (.fold).
 
     Discretisation parameters are in mm; ``None`` means the scale-aware defaults (see ``core.pattern.discretize``).
-    They are ignored for FOLD files, which are already straight segments. Warnings from reading come first in
-    the pattern's ``warnings``. ``collection``: see :func:`read_curves`.
+    Another tool's FOLD file is already straight segments: the interval and tolerance thin its dense polylines and
+    split its border (:func:`.fold.pattern_for_folding`); our own FOLD files read back as written, and the merge
+    tolerance does not apply to FOLD files. Warnings from reading come first in the pattern's ``warnings``.
+    ``collection``: see :func:`read_curves`.
     """
     p = Path(path)
     suffix = _suffix(p)
     if suffix == ".fold" and collection is None:
         from .fold import read_fold_pattern
 
-        return read_fold_pattern(p)
+        return read_fold_pattern(p, interval=interval, tolerance=tolerance)
     curves, warnings = read_curves(p, collection=collection)
     pattern = discretize(curves, interval=interval, tolerance=tolerance, merge_tolerance=merge_tolerance)
     pattern.warnings = warnings + pattern.warnings

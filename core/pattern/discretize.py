@@ -148,9 +148,11 @@ def _estimate_pieces(seg: CurveSegment, interval: float, tolerance: float) -> fl
     return max(length / interval, by_tol, 1.0)
 
 
-CUSP_SPEED = 1e-3
+CUSP_SPEED = 0.02
 """An interior point of a cubic where its speed |B′(t)| falls under this fraction of its fastest is a cusp (the
-handles crossed: the curve stops and turns back) and a vertex of its polyline (:func:`_cusp_parameters`)."""
+handles crossed: the curve stops and turns back) or nearly one (handles 1–2 mm short of crossing on a 150 mm sheet:
+0.0015–0.003; a small loop 0.007), and a vertex of its polyline (:func:`_cusp_parameters`). The drawings we have
+without one have 0.09 or more."""
 
 
 def _cusp_parameters(seg: CurveSegment) -> list[float]:
@@ -616,6 +618,40 @@ def _pattern_sheet_size(pattern: CreasePattern) -> float:
     return float(np.max(np.ptp(pts, axis=0))) if len(pts) else 0.0
 
 
+def segment_parameters(
+    pattern: CreasePattern, interval: float | None, tolerance: float | None
+) -> tuple[float | None, float | None, list[str]]:
+    """The interval and tolerance asked for a pattern read as segments (another tool's FOLD file), validated as a
+    drawing's are (:func:`_resolve_parameters`): ``None`` stays ``None`` (the paper's, scaled to the sheet); an
+    interval under the sheet's merge tolerance is raised to it, and one that would split the border into more than
+    :data:`MAX_SEGMENTS` pieces is raised until it does not, each with a warning."""
+    warnings: list[str] = []
+    for name, value in (("interval", interval), ("tolerance", tolerance)):
+        if value is not None and not (value > 0 and math.isfinite(value)):
+            raise PatternError(f"discretisation: {name} must be a positive number of mm, got {value!r}")
+    size = _pattern_sheet_size(pattern)
+    if interval is None or not (size > 0 and math.isfinite(size)):
+        return interval, tolerance, warnings
+    merge = default_parameters(size)[2]
+    if interval < merge:
+        warnings.append(
+            f"discretisation capped: interval {interval:g} mm is below the merge tolerance {merge:g} mm; "
+            f"used {merge:g} mm"
+        )
+        interval = merge
+    border = pattern.edges[pattern.assignments == "B"]
+    length = float(np.hypot(*(pattern.vertices[border[:, 1]] - pattern.vertices[border[:, 0]]).T).sum())
+    room = MAX_SEGMENTS - pattern.n_edges
+    if length / interval > room > 0:
+        used = length / room
+        warnings.append(
+            f"discretisation capped: interval {interval:g} mm would split the border into more than "
+            f"{MAX_SEGMENTS} segments; used {used:.4g} mm"
+        )
+        interval = used
+    return interval, tolerance, warnings
+
+
 def with_thinned_polylines(
     pattern: CreasePattern, interval: float | None = None, tolerance: float | None = None
 ) -> CreasePattern:
@@ -1050,8 +1086,9 @@ def _discretise_curves(
     if cusps:
         (k, at), more = cusps[0], f" and {len(cusps) - 1} more" if len(cusps) > 1 else ""
         warnings.append(
-            f"{sources[k]} has a cusp at ({at[0]:.1f}, {at[1]:.1f}) mm{more}: the curve stops and turns back there "
-            "(its handles cross); it is folded as a corner of the crease. Move a handle if the point is not meant"
+            f"{sources[k]} has a cusp at ({at[0]:.1f}, {at[1]:.1f}) mm{more}: the curve (nearly) stops and turns "
+            "back there (its handles cross, or almost); it is folded as a corner of the crease. Move a handle if "
+            "the point is not meant"
         )
     edge_poly = np.repeat(np.array(owner, dtype=np.int64), counts)
     assignment = np.array([c.assignment for c in curves], dtype="<U1")

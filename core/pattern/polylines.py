@@ -199,7 +199,7 @@ def thin_dense_polylines(
         grid.setdefault((int(x // cell), int(y // cell)), []).append(i)
 
     def clear(a: int, b: int, inside: set[int]) -> bool:
-        """No vertex but those of the chain within ``tolerance`` of the chord a–b."""
+        """No vertex but those in ``inside`` (the stretch the chord replaces) within ``tolerance`` of the chord a–b."""
         lo, hi = np.minimum(v[a], v[b]) - tolerance, np.maximum(v[a], v[b]) + tolerance
         near = [
             i
@@ -230,13 +230,17 @@ def thin_dense_polylines(
             | (role[pieces[inner - 1]] != role[pieces[inner]])
             | (angle[pieces[inner - 1]] != angle[pieces[inner]])
         )
+        if chain[0] == chain[-1] and len(chain) > 3:
+            # a closed loop keeps three vertices at least: thinned from its one stop it could shrink to two chords
+            # between the same two vertices, or one back to its start (a 0.1 mm slot drawn as a closed cut)
+            fixed[[len(chain) // 3, 2 * len(chain) // 3]] = True
         stops = np.flatnonzero(fixed)
-        own = set(chain.tolist())  # the chain's own vertices are no obstacle: they are what the chord replaces
         for s0, s1 in zip(stops[:-1], stops[1:], strict=True):
             i = int(s0)
             while i < s1:
                 best = i + _reach(v[chain[i : int(s1) + 1]], interval, tolerance)
-                while best > i + 1 and not clear(int(chain[i]), int(chain[best]), own):
+                # the vertices a chord replaces are no obstacle; the rest of its chain is (the far side of a slot)
+                while best > i + 1 and not clear(int(chain[i]), int(chain[best]), set(chain[i : best + 1].tolist())):
                     best -= 1
                 if best > i + 1:
                     kept[pieces[i:best]] = False

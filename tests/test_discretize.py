@@ -355,6 +355,9 @@ coord = st.floats(min_value=-100, max_value=100, allow_nan=False)
     interval=st.floats(min_value=1.0, max_value=30.0),
     tolerance=st.floats(min_value=0.005, max_value=2.0),
 )
+# handles on one point: a near-cusp (speed 1 % of the fastest) whose sides were refined at their own midpoints
+@example(pts=[(0.0, 1.0), (0.0, 0.0), (0.0, 0.0), (1.0, 5.0)], interval=1.0, tolerance=0.015625)
+@example(pts=[(0.0, 0.0), (2.0, 0.0), (9.0, 2.0), (0.0, 0.0)], interval=2.0, tolerance=0.03125)
 def test_any_cubic_meets_interval_and_tolerance(pts, interval, tolerance) -> None:
     seg = CurveSegment("cubic", np.array(pts, dtype=float))
     t = curve_parameters(seg, interval, tolerance)

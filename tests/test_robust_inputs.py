@@ -120,6 +120,26 @@ def test_a_black_slit_inside_the_sheet_is_named_and_read_as_a_cut() -> None:
     assert report["warnings"] == black.warnings and not report["does_not_fold_as_assigned"]
 
 
+def test_a_slit_inside_the_sheet_is_cut_open() -> None:
+    """Slits with both ends inside the sheet (a kirigami lattice, a review session): drawn as one segment each, no
+    vertex of theirs got a copy when the mesh was cut open (a tip's fan is whole), so they stayed shut: the mesh's
+    boundary was the border alone. Straight cuts are now split at the interval as the border is, a lone slit into
+    two at least: the boundary is the border plus both sides of every slit."""
+    from curved_fold.core.mesh.build import build_mesh
+    from curved_fold.core.metrics.measures import edge_triangles
+
+    slits = "".join(
+        f'<path d="M {x} {y} L {x + w} {y}" stroke="#0f0"/>'
+        for y, w in ((20, 15), (40, 6), (60, 3))
+        for x in (10, 40, 70)
+    )
+    mesh = build_mesh(pattern_of(BORDER + slits))
+    f1, f2, _, _ = edge_triangles(mesh)
+    rim = mesh.edges[(f1 < 0) | (f2 < 0)]
+    length = np.hypot(*(mesh.vertices[rim[:, 1]] - mesh.vertices[rim[:, 0]]).T).sum()
+    assert length == pytest.approx(400.0 + 2 * 3 * (15 + 6 + 3))
+
+
 @pytest.mark.parametrize(
     "line",
     [

@@ -216,7 +216,8 @@ def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budge
     """
     cusps = _cusp_parameters(seg)
     if cusps:
-        # each part with one cusp end: between two cusps (a tiny loop), split at the middle
+        # each part with one cusp end: between two cusps (a tiny loop), split at the middle; its parameters from
+        # equal steps along it, then refined below on the segment's own parameter, as any curve's are
         sides = [(0.0, cusps[0], False)]
         for a, b in zip(cusps[:-1], cusps[1:], strict=True):
             sides += [(a, 0.5 * (a + b), True), (0.5 * (a + b), b, False)]
@@ -224,30 +225,43 @@ def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budge
         parts = []
         for lo, hi, at_lo in sides:
             part = _Part(seg, lo, hi, cusp_at_lo=at_lo)
-            parts.append(part.parameter(curve_parameters(part, interval, tolerance, budget)[:-1]))  # type: ignore[arg-type]
-        return np.concatenate([*parts, [1.0]])
+            parts.append(part.parameter(_equal_steps(part, interval, budget)[:-1]))  # type: ignore[arg-type]
+        t = np.concatenate([*parts, [1.0]])
+    else:
+        t = _equal_steps(seg, interval, budget)
+    p = seg.evaluate(t)
+    at_cusp = np.array(cusps)
+    for _ in range(64):
+        tm = 0.5 * (t[:-1] + t[1:])
+        dist = point_segment_distance(seg.evaluate(tm), p[:-1], p[1:])
+        bad = dist > tolerance
+        if not bad.any() or len(t) + int(bad.sum()) > budget + 1:
+            break
+        # a chord is split at its parameter midpoint, or from a cusp at 1/√2 of its parameter span: the curve
+        # leaves a cusp as (t − c)², so that is its midpoint along the curve (the parameter's fell at a quarter)
+        ti = tm.copy()
+        if len(at_cusp):
+            lo, hi = np.isin(t[:-1], at_cusp), np.isin(t[1:], at_cusp)
+            ti[lo] = t[:-1][lo] + (t[1:][lo] - t[:-1][lo]) * math.sqrt(0.5)
+            ti[hi & ~lo] = t[1:][hi & ~lo] - (t[1:][hi & ~lo] - t[:-1][hi & ~lo]) * math.sqrt(0.5)
+        order = np.argsort(np.concatenate([t, ti[bad]]), kind="stable")
+        t = np.concatenate([t, ti[bad]])[order]
+        p = np.concatenate([p, seg.evaluate(ti[bad])])[order]
+    return t
+
+
+def _equal_steps(seg: CurveSegment, interval: float, budget: int) -> np.ndarray:
+    """Equal parameter steps, the fewest whose chords are all ≤ ``interval`` (at most ``budget``)."""
     length = _segment_length(seg)
     n = max(1, math.ceil(length / interval))
     tries = 0
     while True:
         t = np.linspace(0.0, 1.0, n + 1)
-        p = seg.evaluate(t)
-        longest = float(np.hypot(*np.diff(p, axis=0).T).max())
+        longest = float(np.hypot(*np.diff(seg.evaluate(t), axis=0).T).max())
         if longest <= interval * (1 + 1e-12) or n >= budget:
-            break
+            return t
         tries += 1
         n = n + 1 if tries < 64 else math.ceil(n * 1.25)
-    for _ in range(64):
-        tm = 0.5 * (t[:-1] + t[1:])
-        pm = seg.evaluate(tm)
-        dist = point_segment_distance(pm, p[:-1], p[1:])
-        bad = dist > tolerance
-        if not bad.any() or len(t) + int(bad.sum()) > budget + 1:
-            break
-        order = np.argsort(np.concatenate([t, tm[bad]]), kind="stable")
-        t = np.concatenate([t, tm[bad]])[order]
-        p = np.concatenate([p, pm[bad]])[order]
-    return t
 
 
 def _segment_polyline(
@@ -579,14 +593,35 @@ def _apply_splits(
     return verts, new_edges, stop_e[:-1][same]
 
 
+def _lone_slits(edges: np.ndarray, assignments: np.ndarray) -> np.ndarray:
+    """Mask of the cut edges (C) whose two ends are both the tips of a slit: on no border edge and on no other cut.
+    Cut open (``..mesh.triangulate.split_cuts``), a vertex gets a copy only where cuts or the border part its fan,
+    so such a slit drawn as one segment stayed shut (a review session's kirigami lattice of 15 mm slits: 600 mm of
+    mesh boundary where the border and both sides of every slit make 3,330 mm). In two pieces its middle vertex opens
+    it."""
+    n = int(edges.max()) + 1 if len(edges) else 0
+    cut = assignments == "C"
+    cuts_at = np.bincount(edges[cut].ravel(), minlength=n)
+    on_border = np.zeros(n, dtype=bool)
+    on_border[edges[assignments == "B"].ravel()] = True
+    tip = (cuts_at == 1) & ~on_border
+    return cut & tip[edges[:, 0]] & tip[edges[:, 1]]
+
+
 def _subdivide_straight(
-    verts: np.ndarray, edges: np.ndarray, attrs: np.ndarray, which: np.ndarray, interval: float
+    verts: np.ndarray,
+    edges: np.ndarray,
+    attrs: np.ndarray,
+    which: np.ndarray,
+    interval: float,
+    least: np.ndarray | int = 1,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Split the straight edges ``which`` (bool mask) into ⌈length / interval⌉ equal pieces (paper §3.1: the border's;
-    :mod:`..mesh.needles`: creases beside needles)."""
+    """Split the straight edges ``which`` (bool mask) into ⌈length / interval⌉ equal pieces, ``least`` at least (per
+    edge or for all) (paper §3.1: the border's, and a cut's, two border sides once cut; :mod:`..mesh.needles`:
+    creases beside needles)."""
     a, b = verts[edges[:, 0]], verts[edges[:, 1]]
     length = np.hypot(*(b - a).T)
-    n = np.where(which, np.maximum(1, np.ceil(length / interval - 1e-9)).astype(np.int64), 1)
+    n = np.where(which, np.maximum(least, np.ceil(length / interval - 1e-9)).astype(np.int64), 1)
     if np.all(n == 1):
         return verts, edges, attrs
     # new interior points: for edge k, parameters 1/n .. (n-1)/n
@@ -718,8 +753,11 @@ def subdivide_straight_border(pattern: CreasePattern, interval: float | None = N
     another tool usually draws a rectangular sheet as four long edges, and without border vertices to attach
     rulings to, the triangulation fans slivers into the corners (a sine-pleat strip: smallest corner 0.06° instead
     of 8.2°, mean fold-angle error 14.9° instead of 2.2°). ``interval`` defaults to the paper's, scaled to the
-    sheet (:func:`pattern_interval`). Edges already short enough are unchanged."""
-    return subdivide_edges(pattern, (pattern.assignments == "B") & ~pattern.edge_from_curve, interval)
+    sheet (:func:`pattern_interval`). Edges already short enough are unchanged. Straight cuts are split alike, a
+    lone slit into two at least (:func:`_lone_slits`)."""
+    which = np.isin(pattern.assignments, ("B", "C")) & ~pattern.edge_from_curve
+    least = np.where(_lone_slits(pattern.edges, pattern.assignments), 2, 1)
+    return subdivide_edges(pattern, which, interval, least)
 
 
 def pattern_interval(pattern: CreasePattern) -> float:
@@ -730,10 +768,12 @@ def pattern_interval(pattern: CreasePattern) -> float:
     return default_parameters(_pattern_sheet_size(pattern))[0]
 
 
-def subdivide_edges(pattern: CreasePattern, which: np.ndarray, interval: float | None = None) -> CreasePattern:
-    """``pattern`` with the straight edges ``which`` (bool mask) split into ⌈length / interval⌉ equal pieces; edge
-    k's first piece stays edge k (messages name a file's edges by index), the other pieces come after. ``interval``
-    defaults to :func:`pattern_interval`. Edges already short enough are unchanged."""
+def subdivide_edges(
+    pattern: CreasePattern, which: np.ndarray, interval: float | None = None, least: np.ndarray | int = 1
+) -> CreasePattern:
+    """``pattern`` with the straight edges ``which`` (bool mask) split into ⌈length / interval⌉ equal pieces (``least``
+    at least); edge k's first piece stays edge k (messages name a file's edges by index), the other pieces come
+    after. ``interval`` defaults to :func:`pattern_interval`. Edges already short enough are unchanged."""
     if not which.any():
         return pattern
     if interval is None:
@@ -741,7 +781,7 @@ def subdivide_edges(pattern: CreasePattern, which: np.ndarray, interval: float |
     if not (interval > 0 and math.isfinite(interval)):  # a sheet of one point, or an infinite interval: no split
         return pattern
     m = len(pattern.edges)
-    verts, edges, attrs = _subdivide_straight(pattern.vertices, pattern.edges, np.arange(m), which, interval)
+    verts, edges, attrs = _subdivide_straight(pattern.vertices, pattern.edges, np.arange(m), which, interval, least)
     if len(edges) == m:
         return pattern
     first = np.r_[True, attrs[1:] != attrs[:-1]]
@@ -1869,10 +1909,12 @@ def discretize_steps(
         attrs = np.concatenate([attrs[kept], attrs[source]])
         from_curve = np.concatenate([from_curve[kept], from_curve[source]])
         assignment = pieces.assignment[attrs]
-    # step 6: border pieces drawn straight, between junctions, split evenly (a flattened curve's too: its chords can
-    # be far longer than the interval, and the rulings need border vertices to end at)
-    drawn_straight = (assignment == "B") & ~pieces.from_curve[attrs]
-    verts, edges, kept = _subdivide_straight(verts, edges, np.arange(len(edges)), drawn_straight, interval)
+    # step 6: border and cut pieces drawn straight, between junctions, split evenly (a flattened curve's too: its
+    # chords can be far longer than the interval, and the rulings need border vertices to end at; a cut is two
+    # borders once cut open, and a lone slit needs a vertex inside to open at all)
+    drawn_straight = np.isin(assignment, ("B", "C")) & ~pieces.from_curve[attrs]
+    least = np.where(_lone_slits(edges, assignment), 2, 1)
+    verts, edges, kept = _subdivide_straight(verts, edges, np.arange(len(edges)), drawn_straight, interval, least)
     attrs, from_curve = attrs[kept], from_curve[kept]
 
     # drop stray vertices, renumber

@@ -35,8 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--interval",
         type=float,
         default=None,
-        help="max chord length of discretised curves and borders, and of straight creases split beside needle "
-        "triangles (mm)",
+        help="max chord length of discretised curves (an SVG's, or another tool's FOLD polylines), borders and "
+        "cuts, and of straight creases split beside needle triangles (mm)",
     )
     p.add_argument("--tolerance", type=float, default=None, help="max curve deviation of a chord (mm)")
     p.add_argument("--mesh", default="ruling", choices=("ruling", "cdt", "earcut"), help="triangulation")

@@ -545,6 +545,24 @@ def test_a_cusp_is_a_vertex_and_said_not_sampled_down_to_the_merge_tolerance() -
     assert corner_angles(mesh.vertices, mesh.triangles).min() > 1.0
 
 
+def test_a_near_cusp_is_a_cusp_too() -> None:
+    """Handles 2 mm short of crossing on a 150 mm sheet (a review session): the curve nearly stops and turns back
+    (its slowest point 0.3 % of its fastest). With cusps at 0.1 %, it kept the old sampling down to the merge
+    tolerance and 4 corners under 1° (0.20°); at 2 % it is a cusp, and none is left."""
+    from curved_fold.core.mesh.build import build_mesh
+    from curved_fold.core.mesh.fold_mesh import corner_angles
+
+    svg = (
+        '<svg xmlns="http://www.w3.org/2000/svg" width="150mm" height="150mm" viewBox="0 0 150 150">'
+        '<rect x="0" y="0" width="150" height="150" fill="none" stroke="#000000"/>'
+        '<path id="nc" d="M 0 75 C 140 130 -8 130 150 75" fill="none" stroke="#0000ff" stroke-opacity="0.5"/></svg>'
+    )
+    pattern = discretize(parse_svg_text(svg, "nc.svg").curves)
+    assert any("<path id='nc'> (line 1) has a cusp at" in w for w in pattern.warnings)
+    mesh = build_mesh(pattern)
+    assert corner_angles(mesh.vertices, mesh.triangles).min() > 1.0
+
+
 # ------------------------------------------------------------------------------------------------ flattened curves
 
 

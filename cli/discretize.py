@@ -41,9 +41,9 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``discretize``; returns the exit code."""
     import time
 
-    from ..core.io.fold import write_pattern_fold
+    from ..core.io.fold import PREFIX, read_fold, write_pattern_fold
     from ..core.io.reader import read_curves, read_pattern
-    from ..core.pattern.discretize import default_parameters, discretize, sheet_size
+    from ..core.pattern.discretize import default_parameters, discretize, pattern_sheet_size, sheet_size
 
     path = Path(args.input)
     out = Path(args.out)
@@ -58,7 +58,8 @@ def run(args: argparse.Namespace) -> int:
     is_fold = path.suffix.lower() == ".fold"
     with Progress(quiet=args.quiet).stage(f"{path.name}"):
         if is_fold:
-            pattern = read_pattern(path, collection=args.collection)
+            pattern = read_pattern(path, interval=args.interval, tolerance=args.tolerance, collection=args.collection)
+            ours = PREFIX + "edge_polyline" in read_fold(path).data
         else:
             curves, warnings = read_curves(path, collection=args.collection)
             pattern = discretize(curves, interval=args.interval, tolerance=args.tolerance, merge_tolerance=args.merge)
@@ -68,8 +69,20 @@ def run(args: argparse.Namespace) -> int:
     if args.quiet:
         return 0
     print(f"read {path} ({ms:.0f} ms)")
-    if is_fold:
-        print("parameters: none (a FOLD file is already straight segments)")
+    if is_fold and ours:
+        print("parameters: none (a FOLD file of ours: its segments are read back as written)")
+    elif is_fold:
+        size = pattern_sheet_size(pattern)
+        defaults = dict(zip(("interval", "tolerance"), default_parameters(size)[:2], strict=True))
+        print(
+            f"sheet size {size:.3f} mm (another tool's FOLD file: its dense polylines thinned, border and cuts split)"
+        )
+        for name in ("interval", "tolerance"):
+            given = getattr(args, name)
+            print(
+                f"  {name}: "
+                + (f"{defaults[name]:.4g} mm (default, scale-aware)" if given is None else f"{given:.4g} mm (given)")
+            )
     else:
         size = sheet_size(curves)
         defaults = dict(zip(("interval", "tolerance", "merge"), default_parameters(size), strict=True))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -98,8 +99,25 @@ def test_fold_input_is_copied_through(tmp_path: Path) -> None:
     assert run(str(EXAMPLES / "concentric_arcs.svg"), "--out", str(first)).returncode == 0
     res = run(str(first), "--out", str(second))
     assert res.returncode == 0, res.stderr
-    assert "parameters: none (a FOLD file is already straight segments)" in res.stdout
+    assert "parameters: none (a FOLD file of ours: its segments are read back as written)" in res.stdout
     assert second.read_bytes() == first.read_bytes()
+
+
+def test_another_tools_fold_input_says_and_takes_its_parameters(tmp_path: Path) -> None:
+    """Another tool's FOLD file is thinned and its border split at the interval and tolerance given (the summary
+    said "parameters: none", and --interval was ignored)."""
+    src, out = tmp_path / "other.fold", tmp_path / "o.fold"
+    t = [i / 200 for i in range(201)]
+    coords = [[0, 0], [100, 0], [100, 100], [0, 100]] + [[50 + 10 * math.sin(2 * math.pi * u), 100 * u] for u in t]
+    edges = [[0, 1], [1, 2], [2, 3], [3, 0]] + [[4 + i, 5 + i] for i in range(200)]
+    doc = {"vertices_coords": coords, "edges_vertices": edges, "edges_assignment": ["B"] * 4 + ["V"] * 200}
+    src.write_text(json.dumps(doc | {"edges_foldAngle": [0] * 4 + [90] * 200, "frame_unit": "mm"}))
+    res = run(str(src), "--out", str(out), "--interval", "3", "--tolerance", "0.02")
+    assert res.returncode == 0, res.stderr
+    assert "another tool's FOLD file: its dense polylines thinned, border and cuts split" in res.stdout
+    assert "  interval: 3 mm (given)" in res.stdout and "  tolerance: 0.02 mm (given)" in res.stdout
+    valleys = json.loads(out.read_text())["edges_assignment"].count("V")
+    assert 20 < valleys < 200
 
 
 def test_quiet_prints_nothing_and_still_writes(tmp_path: Path) -> None:

@@ -645,7 +645,7 @@ def _subdivide_straight(
     return np.concatenate([verts, new_pts]), new_edges, attrs[owner[:-1][same]]
 
 
-def _pattern_sheet_size(pattern: CreasePattern) -> float:
+def pattern_sheet_size(pattern: CreasePattern) -> float:
     """The sheet size of a discretised pattern, as :func:`sheet_size` is a drawing's: the largest extent of its
     border's vertices, or of every vertex if there is no border (0 for none)."""
     border = pattern.edges[pattern.assignments == "B"]
@@ -664,7 +664,7 @@ def segment_parameters(
     for name, value in (("interval", interval), ("tolerance", tolerance)):
         if value is not None and not (value > 0 and math.isfinite(value)):
             raise PatternError(f"discretisation: {name} must be a positive number of mm, got {value!r}")
-    size = _pattern_sheet_size(pattern)
+    size = pattern_sheet_size(pattern)
     if interval is None or not (size > 0 and math.isfinite(size)):
         return interval, tolerance, warnings
     merge = default_parameters(size)[2]
@@ -698,7 +698,7 @@ def with_thinned_polylines(
     onto 0.5 mm pieces (495 corners under 1° where its SVG twin has none; a 1 m CAD sheet: 10,052 faces, 6.7 s,
     against 202 faces). ``interval`` and ``tolerance`` default to the paper's, scaled to the sheet. A chord keeps
     the source of the first segment it replaces, so messages name the file's edge where it starts."""
-    size = _pattern_sheet_size(pattern)
+    size = pattern_sheet_size(pattern)
     if not (size > 0 and math.isfinite(size)):
         return pattern
     d_interval, d_tolerance, _ = default_parameters(size)
@@ -737,7 +737,7 @@ def with_flattened_curves(pattern: CreasePattern, tolerance: float | None = None
     tool). ``tolerance`` defaults to the paper's, scaled to the sheet (:func:`default_parameters` of the largest
     extent of the border, or of every vertex if there is none)."""
     if tolerance is None:
-        size = _pattern_sheet_size(pattern)
+        size = pattern_sheet_size(pattern)
         if not (size > 0 and math.isfinite(size)):
             return pattern
         tolerance = default_parameters(size)[1]
@@ -765,7 +765,7 @@ def pattern_interval(pattern: CreasePattern) -> float:
     paper's, scaled to its sheet (:func:`default_parameters` of the border's largest extent)."""
     if not math.isnan(pattern.interval):
         return pattern.interval
-    return default_parameters(_pattern_sheet_size(pattern))[0]
+    return default_parameters(pattern_sheet_size(pattern))[0]
 
 
 def subdivide_edges(

@@ -44,7 +44,7 @@ CATALOGUE: dict[str, str] = {
     "no paper": r"triangulation: no paper left: the border does not enclose any region",
     "collinear": r"triangulation: all pattern vertices lie on one line",
     "all segments degenerate": r"crease pattern: every segment is shorter than the merge tolerance",
-    "segments cross (triangulation)": r"triangulation: segments cross or touch near \(",
+    "segments cross (triangulation)": r"triangulation: (segments|pattern edges .* and .*) cross or touch near \(",
     "edge not in triangulation": r"triangulation: pattern edge \d+ \(.*\) is not an edge of the triangulation",
     "vertex not in triangulation": r"triangulation: pattern vertex \d+ at \[.*\] mm is not in the triangulation",
     "degenerate triangle": r"(triangle \d+ .* is degenerate|has zero length)",

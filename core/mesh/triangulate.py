@@ -38,6 +38,7 @@ from fractions import Fraction
 import numpy as np
 
 from ..pattern.model import CreasePattern, PatternError
+from ..pattern.polylines import point_segment_distance
 
 BACKENDS = ("auto", "triangle", "mathutils")
 
@@ -136,12 +137,16 @@ def _cdt_triangle(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
 
     out = triangle.triangulate({"vertices": points, "segments": segments}, "pcQ")
     if len(out["vertices"]) != len(points):
-        extra = out["vertices"][len(points)]
-        raise PatternError(
-            f"triangulation: segments cross or touch near ({extra[0]:.4g}, {extra[1]:.4g}) mm; the pattern must be "
-            "discretised with intersections split (Triangle added a vertex there)"
-        )
+        raise _CrossingError(np.asarray(out["vertices"][len(points)], dtype=float))
     return np.asarray(out["triangles"], dtype=np.int64)
+
+
+class _CrossingError(PatternError):
+    """Two segments cross or touch away from a vertex (Triangle added one there, at ``at``): named by the caller."""
+
+    def __init__(self, at: np.ndarray) -> None:
+        super().__init__(f"triangulation: segments cross or touch near ({at[0]:.4g}, {at[1]:.4g}) mm")
+        self.at = at
 
 
 def _cdt_mathutils(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
@@ -498,7 +503,17 @@ def _triangulate_hull(pattern: CreasePattern, sg: _Segments, backend: str) -> np
             f"triangulation: pattern vertex {v} at {pattern.vertices[v].round(4).tolist()} mm is not in the "
             "triangulation (it duplicates another vertex)"
         )
-    tris = _cdt_triangle(pts, sg.segments) if backend == "triangle" else _cdt_mathutils(pts, sg.segments)
+    try:
+        tris = _cdt_triangle(pts, sg.segments) if backend == "triangle" else _cdt_mathutils(pts, sg.segments)
+    except _CrossingError as crossing:
+        # a drawing's crossings are split when it is discretised; a FOLD file's edges are taken as they are
+        a, b = pts[sg.segments[:, 0]], pts[sg.segments[:, 1]]
+        near = np.argsort(point_segment_distance(np.broadcast_to(crossing.at, a.shape), a, b), kind="stable")[:2]
+        named = " and ".join(_named(pattern, sg.segment_of[tuple(sorted(sg.segments[k].tolist()))]) for k in near)
+        raise PatternError(
+            f"triangulation: pattern edges {named} cross or touch near ({crossing.at[0]:.4g}, {crossing.at[1]:.4g})"
+            " mm away from a vertex; a crease pattern's edges may meet only at their ends (split them there)"
+        ) from None
     area = orient(pts[tris[:, 0]], pts[tris[:, 1]], pts[tris[:, 2]])
     tris[area < 0] = tris[area < 0][:, [0, 2, 1]]
     tris = tris[np.abs(area) > 0]

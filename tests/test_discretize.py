@@ -743,3 +743,18 @@ def test_an_end_moved_onto_the_border_does_not_double_it() -> None:
     assert any("kept border (B) over slant (M)" in w for w in pattern.warnings), pattern.warnings
     report = fold_pattern(pattern, percent=1.0).report
     assert report["converged"], report["message"]
+
+
+def test_a_polyline_twice_as_dense_as_the_paper_samples_is_thinned() -> None:
+    """A designer session's sine valley drawn as a 300-point polyline (1.34 mm pieces) on a 400 mm sheet
+    (``tests/data/dense_sine_polyline_400.svg``): at a 5 mm interval it was kept point for point (thinned only under
+    a quarter of the interval), and the border's vertices fanned 482 corners under 1° onto it; at 8 mm it was
+    thinned and had none. Under half the interval it is thinned now."""
+    from curved_fold.core.mesh.build import build_mesh
+    from curved_fold.core.mesh.fold_mesh import corner_angles
+
+    path = Path(__file__).resolve().parent / "data" / "dense_sine_polyline_400.svg"
+    pattern = discretize(read_svg(path).curves, interval=5.0)
+    assert np.count_nonzero(pattern.assignments == "V") < 200
+    mesh = build_mesh(pattern)
+    assert corner_angles(mesh.vertices, mesh.triangles).min() > 1.0

@@ -305,7 +305,7 @@ def test_another_tools_long_border_edges_are_split_as_a_drawings(tmp_path: Path)
     Our own pattern files keep the pieces they were written with."""
     from curved_fold.core.pattern.discretize import default_parameters
 
-    t = np.linspace(0.0, 1.0, 21)  # 2 mm pieces: sampled as the paper samples, not thinned
+    t = np.linspace(0.0, 1.0, 13)  # 3.3 mm pieces: sampled as the paper samples, not thinned
     xs = (30.0, 60.0, 90.0)
     # the outline through the creases' ends, as a planar graph: bottom 0-1-2-3-4, top 5-6-7-8-9 (right to left)
     coords = [[x, 0.0] for x in (0.0, *xs, 120.0)] + [[x, 40.0] for x in (120.0, *xs[::-1], 0.0)]
@@ -339,7 +339,7 @@ def test_another_tools_long_border_edges_are_split_as_a_drawings(tmp_path: Path)
     crease = raw.assignments != "B"
     np.testing.assert_array_equal(pattern.edges[:m][crease], raw.edges[crease])
     split, whole = fold_pattern(pattern).report, fold_pattern(raw).report
-    # here: mean fold-angle error 15° against 38°, strain at most 1.1 % against 1.8 %
+    # here: mean fold-angle error 16° against 34°, strain at most 1.3 % against 1.6 %
     assert split["converged"] and split["fold_angle_error_mean_deg"] < 0.5 * whole["fold_angle_error_mean_deg"]
     assert split["strain_max_pct"] < whole["strain_max_pct"]
 

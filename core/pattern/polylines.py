@@ -152,11 +152,15 @@ def flattened_curves(
     return out
 
 
-OVERSAMPLED_FRACTION = 0.25
+OVERSAMPLED_FRACTION = 0.5
 """A drawn polyline whose median piece is shorter than this fraction of the interval is thinned
 (:func:`thin_dense_polylines`): the paper's own sampling (chords up to the interval, refined where a chord strays
 beyond the tolerance) has its median piece at half the interval or more, except on curves tighter than the tolerance
-allows, which thinning leaves as they are."""
+allows, which thinning leaves as they are. It was a quarter until the fifteenth pass: a designer's 300-point sine
+(1.34 mm pieces on a 400 mm sheet) was thinned at an 8 mm interval and kept point for point at 5 mm, which fanned
+482 corners under 1° onto it; at a half it is thinned at 5 mm too (516 faces, none under 1°). Of 359 drawings, the
+fixtures and the examples, one changes (a shell of flattened arcs with drawn rungs: 1,162 → 602 faces, its figures
+alike)."""
 
 
 def thin_dense_polylines(

@@ -204,7 +204,13 @@ class _Part:
         return self.seg.evaluate(self.parameter(np.asarray(u, dtype=float)))
 
 
-def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budget: int = MAX_SEGMENTS) -> np.ndarray:
+def curve_parameters(
+    seg: CurveSegment,
+    interval: float,
+    tolerance: float,
+    budget: int = MAX_SEGMENTS,
+    cusps: list[float] | None = None,
+) -> np.ndarray:
     """Parameters of the polyline vertices of one curved segment (paper §3.1), sorted, starting 0 and ending 1.
 
     Equal parameter steps with the smallest count whose chords are all ≤ ``interval``, then repeated insertion of
@@ -213,8 +219,10 @@ def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budge
     on its own: a chord across a cusp strays from the curve in proportion to its length, so halving it never met
     the tolerance, and the curve was sampled down to the merge tolerance there (a designer session's cusp: the
     warning asked for a larger tolerance, which changed nothing, and 82 mm triangles fanned onto the 1 mm stretch).
+    ``cusps``: :func:`_cusp_parameters` of ``seg``, if the caller has them already.
     """
-    cusps = _cusp_parameters(seg)
+    if cusps is None:
+        cusps = _cusp_parameters(seg)
     if cusps:
         # each part with one cusp end: between two cusps (a tiny loop), split at the middle; its parameters from
         # equal steps along it, then refined below on the segment's own parameter, as any curve's are
@@ -239,11 +247,9 @@ def curve_parameters(seg: CurveSegment, interval: float, tolerance: float, budge
             break
         # a chord is split at its parameter midpoint, or from a cusp at 1/√2 of its parameter span: the curve
         # leaves a cusp as (t − c)², so that is its midpoint along the curve (the parameter's fell at a quarter)
-        ti = tm.copy()
-        if len(at_cusp):
-            lo, hi = np.isin(t[:-1], at_cusp), np.isin(t[1:], at_cusp)
-            ti[lo] = t[:-1][lo] + (t[1:][lo] - t[:-1][lo]) * math.sqrt(0.5)
-            ti[hi & ~lo] = t[1:][hi & ~lo] - (t[1:][hi & ~lo] - t[:-1][hi & ~lo]) * math.sqrt(0.5)
+        start, end = t[:-1], t[1:]
+        step = (end - start) * math.sqrt(0.5)
+        ti = np.where(np.isin(start, at_cusp), start + step, np.where(np.isin(end, at_cusp), end - step, tm))
         order = np.argsort(np.concatenate([t, ti[bad]]), kind="stable")
         t = np.concatenate([t, ti[bad]])[order]
         p = np.concatenate([p, seg.evaluate(ti[bad])])[order]
@@ -265,17 +271,17 @@ def _equal_steps(seg: CurveSegment, interval: float, budget: int) -> np.ndarray:
 
 
 def _segment_polyline(
-    seg: CurveSegment, assignment: str, interval: float, tolerance: float, budget: int
+    seg: CurveSegment, interval: float, tolerance: float, budget: int, cusps: list[float]
 ) -> tuple[np.ndarray, bool, float]:
     """Polyline points of one drawn segment, whether they discretise a curve (see module docstring), and the
     largest distance of a chord's curve midpoint from the chord (0 for straight segments): above ``tolerance``
-    when refinement stopped at the budget."""
+    when refinement stopped at the budget. ``cusps``: its :func:`_cusp_parameters`."""
     start, end = seg.points[0], seg.points[-1]
     if seg.is_straight:
         # Straight border segments are subdivided after the planar clean-up (see _subdivide_straight), so their
         # pieces are spread evenly between the junctions the designer drew and never leave slivers next to them.
         return np.array([start, end], dtype=float), False, 0.0
-    t = curve_parameters(seg, interval, tolerance, budget)
+    t = curve_parameters(seg, interval, tolerance, budget, cusps)
     pts = seg.evaluate(t)
     pts[0], pts[-1] = start, end  # exact joints with the neighbouring segments
     worst = float(point_segment_distance(seg.evaluate(0.5 * (t[:-1] + t[1:])), pts[:-1], pts[1:]).max())
@@ -661,19 +667,11 @@ def segment_parameters(
     interval under the sheet's merge tolerance is raised to it, and one that would split the border into more than
     :data:`MAX_SEGMENTS` pieces is raised until it does not, each with a warning."""
     warnings: list[str] = []
-    for name, value in (("interval", interval), ("tolerance", tolerance)):
-        if value is not None and not (value > 0 and math.isfinite(value)):
-            raise PatternError(f"discretisation: {name} must be a positive number of mm, got {value!r}")
+    _check_positive(interval, tolerance)
     size = pattern_sheet_size(pattern)
     if interval is None or not (size > 0 and math.isfinite(size)):
         return interval, tolerance, warnings
-    merge = default_parameters(size)[2]
-    if interval < merge:
-        warnings.append(
-            f"discretisation capped: interval {interval:g} mm is below the merge tolerance {merge:g} mm; "
-            f"used {merge:g} mm"
-        )
-        interval = merge
+    interval = _interval_above_merge(interval, default_parameters(size)[2], warnings)
     border = pattern.edges[pattern.assignments == "B"]
     length = float(np.hypot(*(pattern.vertices[border[:, 1]] - pattern.vertices[border[:, 0]]).T).sum())
     room = MAX_SEGMENTS - pattern.n_edges
@@ -720,10 +718,16 @@ def with_thinned_polylines(
     used = np.unique(edges)
     remap = np.full(pattern.n_vertices, -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
+    return _with_edges(pattern, pattern.vertices[used], remap[edges], attrs)
+
+
+def _with_edges(pattern: CreasePattern, vertices: np.ndarray, edges: np.ndarray, attrs: np.ndarray) -> CreasePattern:
+    """``pattern`` with new ``vertices`` and ``edges``, edge k taking the role, angle, source and curve flag of
+    ``pattern``'s edge ``attrs[k]``."""
     return replace(
         pattern,
-        vertices=pattern.vertices[used],
-        edges=remap[edges],
+        vertices=vertices,
+        edges=edges,
         assignments=pattern.assignments[attrs],
         fold_angles=pattern.fold_angles[attrs],
         edge_polyline=pattern.edge_polyline[attrs],
@@ -786,16 +790,7 @@ def subdivide_edges(
         return pattern
     first = np.r_[True, attrs[1:] != attrs[:-1]]
     order = np.r_[np.flatnonzero(first), np.flatnonzero(~first)]
-    edges, attrs = edges[order], attrs[order]
-    return replace(
-        pattern,
-        vertices=verts,
-        edges=edges,
-        assignments=pattern.assignments[attrs],
-        fold_angles=pattern.fold_angles[attrs],
-        edge_polyline=pattern.edge_polyline[attrs],
-        edge_from_curve=pattern.edge_from_curve[attrs],
-    )
+    return _with_edges(pattern, verts, edges[order], attrs[order])
 
 
 def _drop_samples_beside_junctions(
@@ -866,8 +861,7 @@ def _drop_samples_beside_junctions(
                 continue
             new_edges[k] = (junction, w)
             drop[k2] = True
-            touched.update((sample, w))
-            touched.add(junction)
+            touched.update((junction, sample, w))
             sectors.setdefault(junction, []).append((line, pb - pa, pw - pa))
             removed += 1
             break
@@ -992,6 +986,26 @@ def _check_coordinates(curves: list[CreaseCurve]) -> None:
                 )
 
 
+def _check_positive(interval: float | None, tolerance: float | None) -> None:
+    """Refuse an interval or tolerance that is not a positive number of mm (``None``: the default, not checked)."""
+    for name, value in (("interval", interval), ("tolerance", tolerance)):
+        if value is not None and not (value > 0 and math.isfinite(value)):
+            raise PatternError(f"discretisation: {name} must be a positive number of mm, got {value!r}")
+
+
+def _interval_above_merge(interval: float, merge_tolerance: float, warnings: list[str]) -> float:
+    """``interval``, raised to the merge tolerance with a warning if below it: pieces shorter than that are welded
+    together again (curves) or left as slivers below it (border subdivision, which runs after merging); never
+    useful, and it multiplies the vertex count."""
+    if interval >= merge_tolerance:
+        return interval
+    warnings.append(
+        f"discretisation capped: interval {interval:g} mm is below the merge tolerance {merge_tolerance:g} mm; "
+        f"used {merge_tolerance:g} mm"
+    )
+    return merge_tolerance
+
+
 def _resolve_parameters(
     curves: list[CreaseCurve],
     interval: float | None,
@@ -1010,19 +1024,10 @@ def _resolve_parameters(
     interval = d_int if interval is None else float(interval)
     tolerance = d_tol if tolerance is None else float(tolerance)
     merge_tolerance = d_merge if merge_tolerance is None else float(merge_tolerance)
-    for name, value in (("interval", interval), ("tolerance", tolerance)):
-        if not (value > 0 and math.isfinite(value)):
-            raise PatternError(f"discretisation: {name} must be a positive number of mm, got {value!r}")
+    _check_positive(interval, tolerance)
     if not (merge_tolerance >= 0 and math.isfinite(merge_tolerance)):
         raise PatternError(f"discretisation: merge tolerance must be ≥ 0 mm, got {merge_tolerance!r}")
-    if interval < merge_tolerance:
-        # pieces shorter than the merge tolerance are welded together again (curves) or left as slivers below it
-        # (border subdivision, which runs after merging): never useful, and it multiplies the vertex count
-        warnings.append(
-            f"discretisation capped: interval {interval:g} mm is below the merge tolerance {merge_tolerance:g} mm; "
-            f"used {merge_tolerance:g} mm"
-        )
-        interval = merge_tolerance
+    interval = _interval_above_merge(interval, merge_tolerance, warnings)
     tolerance_floor = max(merge_tolerance, size * 1e-6) * TOLERANCE_FLOOR_OF_MERGE
     if tolerance < tolerance_floor:
         # chords that fine are shorter than the merge tolerance on all but the flattest curves and are welded again
@@ -1097,13 +1102,14 @@ def _discretise_curves(
                 curved = False
             else:
                 budget = max(2, MAX_SEGMENTS - total)
-                pts, curved, worst = _segment_polyline(seg, c.assignment, interval, tolerance, budget)
+                cusp_t = _cusp_parameters(seg)
+                pts, curved, worst = _segment_polyline(seg, interval, tolerance, budget, cusp_t)
                 n = len(pts) - 1
                 if n >= budget or worst > tolerance * (1 + 1e-9):
                     hit_budget = True
                 if n > 1 and float(np.hypot(*np.diff(pts, axis=0).T).min()) < merge_tolerance:
                     below_merge.append(k)
-                cusps += [(k, seg.evaluate(t)) for t in _cusp_parameters(seg)]
+                cusps += [(k, seg.evaluate(t)) for t in cusp_t]
             points.append(pts)
             owner.append(k)
             curved_flags.append(curved)

@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``discretize``; returns the exit code."""
     import time
 
-    from ..core.io.fold import PREFIX, read_fold, write_pattern_fold
+    from ..core.io.fold import is_our_pattern, read_fold, write_pattern_fold
     from ..core.io.reader import read_curves, read_pattern
     from ..core.pattern.discretize import default_parameters, discretize, pattern_sheet_size, sheet_size
 
@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     with Progress(quiet=args.quiet).stage(f"{path.name}"):
         if is_fold:
             pattern = read_pattern(path, interval=args.interval, tolerance=args.tolerance, collection=args.collection)
-            ours = PREFIX + "edge_polyline" in read_fold(path).data
+            ours = is_our_pattern(read_fold(path))  # read again, once read_pattern has checked the file
         else:
             curves, warnings = read_curves(path, collection=args.collection)
             pattern = discretize(curves, interval=args.interval, tolerance=args.tolerance, merge_tolerance=args.merge)
@@ -71,24 +71,20 @@ def run(args: argparse.Namespace) -> int:
     print(f"read {path} ({ms:.0f} ms)")
     if is_fold and ours:
         print("parameters: none (a FOLD file of ours: its segments are read back as written)")
-    elif is_fold:
-        size = pattern_sheet_size(pattern)
-        defaults = dict(zip(("interval", "tolerance"), default_parameters(size)[:2], strict=True))
-        print(
-            f"sheet size {size:.3f} mm (another tool's FOLD file: its dense polylines thinned, border and cuts split)"
-        )
-        for name in ("interval", "tolerance"):
-            given = getattr(args, name)
-            print(
-                f"  {name}: "
-                + (f"{defaults[name]:.4g} mm (default, scale-aware)" if given is None else f"{given:.4g} mm (given)")
-            )
     else:
-        size = sheet_size(curves)
+        if is_fold:  # no merge tolerance: a FOLD file's vertices are taken as they are
+            size, names = pattern_sheet_size(pattern), ("interval", "tolerance")
+            print(
+                f"sheet size {size:.3f} mm (another tool's FOLD file: its dense polylines thinned, border and cuts "
+                "split)"
+            )
+        else:
+            size, names = sheet_size(curves), ("interval", "tolerance", "merge")
+            basis = "the border" if any(c.assignment == "B" for c in curves) else "all curves (no border)"
+            print(f"sheet size {size:.3f} mm (largest extent of {basis})")
         defaults = dict(zip(("interval", "tolerance", "merge"), default_parameters(size), strict=True))
-        basis = "the border" if any(c.assignment == "B" for c in curves) else "all curves (no border)"
-        print(f"sheet size {size:.3f} mm (largest extent of {basis})")
-        for name, label in (("interval", "interval"), ("tolerance", "tolerance"), ("merge", "merge tolerance")):
+        for name in names:
+            label = "merge tolerance" if name == "merge" else name
             given = getattr(args, name)
             if given is None:
                 print(f"  {label}: {defaults[name]:.4g} mm (default, scale-aware)")

@@ -469,6 +469,12 @@ def _interval(doc: FoldDocument, source: str) -> float:
     return float(value) * UNIT_MM.get(doc.unit, 1.0)
 
 
+def is_our_pattern(doc: FoldDocument) -> bool:
+    """Whether ``doc`` is a pattern we wrote (its segments carry their source strokes, ``curved_fold:edge_polyline``):
+    read back as written, where another tool's file is thinned and split (:func:`pattern_for_folding`)."""
+    return PREFIX + "edge_polyline" in doc.data
+
+
 def read_fold_pattern(
     path: str | os.PathLike[str], *, interval: float | None = None, tolerance: float | None = None
 ) -> CreasePattern:
@@ -487,7 +493,7 @@ def pattern_for_folding(
     :func:`..pattern.discretize.subdivide_straight_border`, :func:`..pattern.discretize.with_flattened_curves`), at
     ``interval`` and ``tolerance`` (mm; ``None``: the paper's, scaled to the sheet; the interval is also the one
     long straight creases are split at beside needles). Our own files ignore them: they read back as written."""
-    if PREFIX + "edge_polyline" in doc.data:
+    if is_our_pattern(doc):
         return fold_to_pattern(doc)
     doc = _flat_foldable_angles(_without_sliver_facets(doc))
     pattern = fold_to_pattern(doc)

@@ -158,17 +158,13 @@ def warp_angles(mesh: FoldMesh, positions: np.ndarray, fold: np.ndarray | None =
     counted = ~np.isin(mesh.assignments, ("M", "V")) & np.isfinite(theta) & (np.abs(theta) >= WARP_MIN_FOLD_DEG)
     prev, nxt = boundary_neighbours(mesh)
     counted &= np.all(prev >= 0, axis=1) & np.all(nxt >= 0, axis=1)
-    # at a slit's tip the two neighbours are the two lips' copies of one flat point: no tangent, and the plane the
-    # gap between them spans is arbitrary (one 20 mm slit took a sheet's mean warp from 1.5° to 6.8°, max 89°)
-    flat = mesh.vertices
-    e_all = mesh.edges
-    span = np.hypot(*(flat[e_all[:, 1]] - flat[e_all[:, 0]]).T)
-    for k in (0, 1):
-        ok = (prev[:, k] >= 0) & (nxt[:, k] >= 0)
-        t_flat = np.where(ok[:, None], flat[np.maximum(nxt[:, k], 0)] - flat[np.maximum(prev[:, k], 0)], 0.0)
-        counted &= np.hypot(*t_flat.T) > 1e-9 * span
     out = np.full(len(mesh.edges), np.nan)
     idx = np.flatnonzero(counted)
+    # at a slit's tip the two neighbours are the two lips' copies of one flat point: no tangent, and the plane the
+    # gap between them spans is arbitrary (one 20 mm slit took a sheet's mean warp from 1.5° to 6.8°, max 89°)
+    v = mesh.vertices
+    span = np.hypot(*(v[mesh.edges[idx, 1]] - v[mesh.edges[idx, 0]]).T)
+    idx = idx[np.all(np.hypot(*(v[nxt[idx]] - v[prev[idx]]).transpose(2, 0, 1)) > 1e-9 * span[:, None], axis=1)]
     if len(idx) == 0:
         return out
     e = mesh.edges[idx]

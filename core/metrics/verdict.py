@@ -218,7 +218,7 @@ def _describe(c: dict[str, Any], percent: float, mesh_type: str) -> str:
         hint = f"; its triangles have corners down to {corner:.2f}° ({better} may mesh it better)"
     # where part of the crease folds, its mean angle can pass the mark: give the angle of the part that does not
     # (a designer's "168.0 mm fold less than half (folded 42° for 72°)")
-    part = c["flat_mm"] + c["wrong_way_mm"] < c["length_mm"] * (1 - 1e-9) and "not_folding_angle_deg" in c
+    part = c["flat_mm"] + c["wrong_way_mm"] < c["length_mm"] * (1 - 1e-9)
     mean = f"{c['angle_deg']:.0f}°"
     angle = f"{c['not_folding_angle_deg']:.0f}° there, {mean} on average over the crease," if part else mean
     return (

@@ -271,10 +271,19 @@ def curves_steps(
     return [curve for curve, _, _ in collected]
 
 
-def stored_pattern(objects: Iterable[bpy.types.Object], *, unit_scale: float | None = None):
+def stored_pattern(
+    objects: Iterable[bpy.types.Object],
+    *,
+    unit_scale: float | None = None,
+    interval: float | None = None,
+    tolerance: float | None = None,
+):
     """The discretised pattern of a FOLD import when ``objects`` are exactly its curve objects, unedited (every
     spline as imported, roles and angles as imported, all placed alike by a similarity): the file's own pattern,
-    which the command line folds without re-discretising. ``None`` otherwise (then the curves are discretised)."""
+    which the command line folds without re-discretising; another tool's file sampled at ``interval`` and
+    ``tolerance`` (mm, ``None`` automatic), as the command line samples it at ``--interval`` and ``--tolerance``
+    (:func:`..core.pattern.discretize.segments_at_interval`). ``None`` otherwise (then the curves are
+    discretised)."""
     scale = default_unit_scale() if unit_scale is None else float(unit_scale)
     objects = [ob for ob in objects if ob is not None]
     if not objects or any(ob.type != "CURVE" for ob in objects):
@@ -302,7 +311,12 @@ def stored_pattern(objects: Iterable[bpy.types.Object], *, unit_scale: float | N
         for spline, strokes in zip(ob.data.splines, desc.splines, strict=True):
             if _unedited_strokes(spline, strokes, desc.unit_scale) is None:
                 return None
-    return exact_curves.pattern_from_json(stored[0], None if np.array_equal(transform, np.eye(3)) else transform)
+    pattern = exact_curves.pattern_from_json(stored[0], None if np.array_equal(transform, np.eye(3)) else transform)
+    if stored[0].segments:
+        from ..core.pattern.discretize import segments_at_interval
+
+        pattern = segments_at_interval(pattern, interval, tolerance)
+    return pattern
 
 
 def _unedited_strokes(spline: bpy.types.Spline, strokes: list, unit_scale: float) -> list | None:
@@ -513,6 +527,7 @@ def objects_from_curves(
     *,
     import_name: str = "pattern",
     pattern=None,
+    segments: bool = False,
 ) -> list[bpy.types.Object]:
     """The crease curves as a handful of curve objects in ``collection``: one per role and fold angle.
 
@@ -524,6 +539,7 @@ def objects_from_curves(
 
     ``pattern`` is the discretised pattern the curves were chained from (a FOLD file): stored too, so that the
     unedited objects fold to that very pattern (:func:`stored_pattern`), as the command line folds a FOLD file.
+    ``segments``: ``pattern`` is another tool's segments, not yet sampled; a fold samples them at its interval.
     """
     curves = list(curves)
     scale = default_unit_scale() if unit_scale is None else float(unit_scale)
@@ -569,7 +585,7 @@ def objects_from_curves(
                 props.fold_angle = math.radians(min(abs(angle), 180.0))
             props.role = role
         if pattern is not None:
-            text = exact_curves.pattern_json(import_id, len(made), pattern)
+            text = exact_curves.pattern_json(import_id, len(made), pattern, segments=segments)
             for ob in made:
                 ob.data[exact_curves.PATTERN_KEY] = text
     except Exception:

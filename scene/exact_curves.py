@@ -327,8 +327,9 @@ PATTERN_KEY = "cf_exact_pattern"
 line folds as it is (no re-discretisation), so the unedited import folds to the same mesh."""
 
 
-def pattern_json(import_id: str, objects: int, pattern) -> str:
-    """The JSON stored under :data:`PATTERN_KEY`: the import, how many objects it made, and the pattern's arrays."""
+def pattern_json(import_id: str, objects: int, pattern, *, segments: bool = False) -> str:
+    """The JSON stored under :data:`PATTERN_KEY`: the import, how many objects it made, the pattern's arrays, and
+    whether they are another tool's segments that a fold samples at its interval (``segments``)."""
     angles = np.asarray(pattern.fold_angles, dtype=np.float64)
     return json.dumps(
         {
@@ -341,6 +342,7 @@ def pattern_json(import_id: str, objects: int, pattern) -> str:
             "edge_polyline": np.asarray(pattern.edge_polyline, dtype=np.int64).tolist(),
             "edge_from_curve": [int(b) for b in np.asarray(pattern.edge_from_curve, dtype=bool).tolist()],
             "sources": list(pattern.sources),
+            "segments": bool(segments),
         },
         separators=(",", ":"),
     )
@@ -351,6 +353,11 @@ class StoredPattern:
     import_id: str
     objects: int
     arrays: dict
+
+    @property
+    def segments(self) -> bool:
+        """Another tool's segments, sampled by each fold at its interval (imports before this field: sampled)."""
+        return bool(self.arrays.get("segments", False))
 
 
 def read_pattern_json(data) -> StoredPattern | None:

@@ -94,7 +94,8 @@ def pattern_steps(objects, *, interval: float = 0.0, tolerance: float = 0.0) -> 
 
     if not objects:
         raise PatternError("no crease curves selected: select curve objects that have a crease role")
-    stored = stored_pattern(objects)  # an unedited FOLD import: its own pattern, as the command line folds it
+    # an unedited FOLD import: its own pattern, as the command line folds it
+    stored = stored_pattern(objects, interval=interval or None, tolerance=tolerance or None)
     if stored is not None:
         return stored
     notes: list[str] = []  # spline-level warnings (a one-point spline, modifiers not folded, ...)

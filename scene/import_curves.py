@@ -32,15 +32,21 @@ def import_crease_pattern(
     """Import ``path`` as curve objects in a new collection (child of ``collection`` or the scene's); return
     ``(objects, warnings)``. The scene is unchanged if reading or conversion fails."""
     scene = scene or bpy.context.scene
-    pattern = None
+    pattern, segments = None, False
     if Path(path).suffix.lower() == ".fold":  # keep the file's pattern: the command line folds it as it is
-        from ..core.io.fold import read_fold_pattern
+        from ..core.io.fold import another_tools_segments, fold_to_pattern, is_our_pattern, read_fold
+        from ..core.pattern.discretize import segments_at_interval
         from ..core.pattern.polylines import curves_from_pattern
 
         if not Path(path).is_file():
             raise PatternError(f"{path}: no such file")
-        pattern = read_fold_pattern(path)
-        curves, warnings = curves_from_pattern(pattern), list(pattern.warnings)
+        doc = read_fold(path)
+        if is_our_pattern(doc):
+            pattern = shown = fold_to_pattern(doc)
+        else:  # another tool's segments, kept unsampled: a fold samples them at its own interval (stored_pattern)
+            pattern, segments = another_tools_segments(doc), True
+            shown = segments_at_interval(pattern)
+        curves, warnings = curves_from_pattern(shown), list(shown.warnings)
     else:
         curves, warnings = read_curves(path)
     if not curves:
@@ -52,7 +58,7 @@ def import_crease_pattern(
     before = set(bpy.data.objects), set(bpy.data.curves), set(bpy.data.materials)
     try:
         parent.children.link(coll)
-        objects = _objects_from_curves(curves, coll, 1.0 / mm_per_unit(scene), Path(path).name, pattern)
+        objects = _objects_from_curves(curves, coll, 1.0 / mm_per_unit(scene), Path(path).name, pattern, segments)
     except Exception:
         for ob in set(bpy.data.objects) - before[0]:
             bpy.data.objects.remove(ob)
@@ -65,7 +71,7 @@ def import_crease_pattern(
     return objects, warnings
 
 
-def _objects_from_curves(curves, coll, unit_scale, name, pattern):
+def _objects_from_curves(curves, coll, unit_scale, name, pattern, segments):
     from .curves import objects_from_curves
 
-    return objects_from_curves(curves, coll, unit_scale, import_name=name, pattern=pattern)
+    return objects_from_curves(curves, coll, unit_scale, import_name=name, pattern=pattern, segments=segments)

@@ -205,6 +205,37 @@ def test_fold_file_import_folds_like_the_command_line(extension, clean_scene, tm
     assert edited.edge_from_curve.any() == theirs.edge_from_curve.any() == (name != "huffmanTower")
 
 
+def test_another_tools_fold_file_is_sampled_at_the_fold_operators_interval(extension, clean_scene, tmp_path):
+    """Another tool's FOLD file (a sine crease as a 201-point polyline) is sampled at the interval the fold asks for,
+    as ``--interval`` samples it on the command line; the import kept it sampled at the automatic interval, so the
+    Fold panel's Interval changed nothing (a guide note, fifteenth pass)."""
+    reader = ext_module(extension, "core.io.reader")
+    pipeline = ext_module(extension, "core.pipeline")
+    bpy.context.scene.unit_settings.scale_length = 0.001  # 1 Blender unit = 1 mm: the interval is exact
+    u = np.linspace(0.0, 1.0, 201)
+    coords = [[0.0, 0.0], [100.0, 0.0], [100.0, 100.0], [0.0, 100.0]]
+    coords += [[50.0 + 10.0 * math.sin(2 * math.pi * t), 100.0 * t] for t in u[1:-1]]
+    coords[4:4] = [[50.0, 0.0], [50.0, 100.0]]  # the sine's ends, on the border
+    sine = [4, *range(6, len(coords)), 5]
+    edges = [[0, 4], [4, 1], [1, 2], [2, 5], [5, 3], [3, 0]] + [
+        [a, b] for a, b in zip(sine[:-1], sine[1:], strict=True)
+    ]
+    assign = ["B"] * 6 + ["V"] * (len(sine) - 1)
+    doc = {"file_spec": 1.1, "frame_unit": "mm", "vertices_coords": coords, "edges_vertices": edges}
+    path = tmp_path / "sine.fold"
+    path.write_text(json.dumps(doc | {"edges_assignment": assign, "edges_foldAngle": [0.0] * 6 + [90.0] * 200}))
+    import_file(path)
+    faces = {}
+    for interval in (0.0, 2.0):
+        assert bpy.ops.curved_fold.fold(collection="sine", interval=interval) == {"FINISHED"}
+        props = bpy.context.active_object.curved_fold_mesh
+        report = pipeline.fold_pattern(reader.read_pattern(path, interval=interval or None)).report
+        assert (props.last_faces, props.last_vertices) == (report["faces"], report["vertices"]), interval
+        assert props.last_strain_mean == pytest.approx(report["strain_mean_pct"], rel=1e-5)
+        faces[interval] = props.last_faces
+    assert faces[2.0] > faces[0.0]  # the automatic interval on a 100 mm sheet is 4.7 mm
+
+
 def test_arcs_stay_arcs_lines_stay_lines_and_edits_win(extension, clean_scene):
     curves_mod = ext_module(extension, "scene.curves")
     path = REPO / "examples" / "cannot_fold.svg"

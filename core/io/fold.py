@@ -28,12 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh, corner_angles, polygon_sides
-from ..pattern.discretize import (
-    segment_parameters,
-    subdivide_straight_border,
-    with_flattened_curves,
-    with_thinned_polylines,
-)
+from ..pattern.discretize import segments_at_interval
 from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
 from .atomic import atomic_write_text
 from .fold_validate import load_fold_json
@@ -487,24 +482,21 @@ def pattern_for_folding(
 ) -> CreasePattern:
     """The crease pattern a fold of ``doc`` starts from, the same through every door (command line, Blender
     import): :func:`fold_to_pattern` and, for another tool's file (no ``curved_fold:`` fields; ours keep the
-    pieces they were discretised with and their curve flags), its polylines sampled far finer than the paper
-    samples thinned, its straight border split into pieces and its chains of segments that follow a curve marked
-    as curve pieces, as a drawing's are (:func:`..pattern.discretize.with_thinned_polylines`,
-    :func:`..pattern.discretize.subdivide_straight_border`, :func:`..pattern.discretize.with_flattened_curves`), at
-    ``interval`` and ``tolerance`` (mm; ``None``: the paper's, scaled to the sheet; the interval is also the one
-    long straight creases are split at beside needles). Our own files ignore them: they read back as written."""
+    pieces they were discretised with and their curve flags), :func:`another_tools_segments` sampled as a drawing
+    is at ``interval`` and ``tolerance`` (mm; ``None``: the paper's, scaled to the sheet; the interval is also the
+    one long straight creases are split at beside needles; :func:`..pattern.discretize.segments_at_interval`). Our
+    own files ignore them: they read back as written."""
     if is_our_pattern(doc):
         return fold_to_pattern(doc)
-    doc = _flat_foldable_angles(_without_sliver_facets(doc))
-    pattern = fold_to_pattern(doc)
-    interval, tolerance, said = segment_parameters(pattern, interval, tolerance)
-    pattern = with_thinned_polylines(pattern, interval, tolerance)
-    pattern = with_flattened_curves(subdivide_straight_border(pattern, interval), tolerance)
-    if interval is not None:
-        pattern = replace(pattern, interval=interval)
-    pattern.warnings = [*pattern.warnings, *said]
-    pattern.validate()
-    return pattern
+    return segments_at_interval(another_tools_segments(doc), interval, tolerance)
+
+
+def another_tools_segments(doc: FoldDocument) -> CreasePattern:
+    """Another tool's FOLD file as the straight segments it draws, before any sampling: its sliver facets left out
+    (:func:`_without_sliver_facets`) and its creases without a fold angle folding flat (:func:`_flat_foldable_angles`).
+    What depends on the interval is done by :func:`..pattern.discretize.segments_at_interval`, at fold time in
+    Blender (the import keeps these segments), so the Fold panel's Interval applies as ``--interval`` does."""
+    return fold_to_pattern(_flat_foldable_angles(_without_sliver_facets(doc)))
 
 
 def _flat_foldable_angles(doc: FoldDocument) -> FoldDocument:

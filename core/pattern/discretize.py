@@ -764,6 +764,25 @@ def subdivide_straight_border(pattern: CreasePattern, interval: float | None = N
     return subdivide_edges(pattern, which, interval, least)
 
 
+def segments_at_interval(
+    pattern: CreasePattern, interval: float | None = None, tolerance: float | None = None
+) -> CreasePattern:
+    """A crease pattern read as straight segments (a FOLD file from another tool) sampled as a drawing is, at
+    ``interval`` and ``tolerance`` (mm; ``None``: the paper's, scaled to the sheet): the values checked
+    (:func:`segment_parameters`), its dense polylines thinned (:func:`with_thinned_polylines`), its straight
+    border split (:func:`subdivide_straight_border`) and its chains that follow a curve marked as curve pieces
+    (:func:`with_flattened_curves`). One function for every door: the command line's ``--interval`` and the Fold
+    panel's Interval give the same pattern (a Blender import kept the automatic interval, whatever was set)."""
+    interval, tolerance, said = segment_parameters(pattern, interval, tolerance)
+    pattern = with_thinned_polylines(pattern, interval, tolerance)
+    pattern = with_flattened_curves(subdivide_straight_border(pattern, interval), tolerance)
+    if interval is not None:
+        pattern = replace(pattern, interval=interval)
+    pattern.warnings = [*pattern.warnings, *said]
+    pattern.validate()
+    return pattern
+
+
 def pattern_interval(pattern: CreasePattern) -> float:
     """The interval ``pattern`` was discretised at, or for a pattern read as segments (``interval`` nan) the
     paper's, scaled to its sheet (:func:`default_parameters` of the border's largest extent)."""

@@ -296,6 +296,35 @@ def test_another_tools_file_is_thinned_at_the_interval_asked(tmp_path: Path) -> 
         read_pattern(path, interval=-1.0)
 
 
+def test_another_tools_crossing_edges_are_split_as_a_drawings(tmp_path: Path) -> None:
+    """A hand-made FOLD file draws a valley across a 100 mm sheet and a cut across the valley as single edges that
+    cross away from a vertex (a designer session's kirigami file). It was refused ("pattern edges 6 and 7 cross or
+    touch near (50, 50) mm"), while its SVG twin folds: the drawing's planar clean-up splits crossings. Now the file
+    is split there too, with a warning naming the two file edges, and folds as the file with the crossing split by
+    hand does."""
+    coords = [[0.0, 0.0], [100.0, 0.0], [100.0, 50.0], [100.0, 100.0], [0.0, 100.0], [0.0, 50.0]]
+    coords += [[50.0, 25.0], [50.0, 75.0]]
+    border = [[0, 1], [1, 2], [2, 3], [3, 4], [4, 5], [5, 0]]
+    crossing = {"edges_vertices": border + [[5, 2], [6, 7]], "edges_assignment": ["B"] * 6 + ["V", "C"]}
+    crossing["edges_foldAngle"] = [0.0] * 6 + [90.0, 0.0]
+    split = {"edges_vertices": border + [[5, 8], [8, 2], [6, 8], [8, 7]], "edges_assignment": ["B"] * 6 + list("VVCC")}
+    split["edges_foldAngle"] = [0.0] * 6 + [90.0, 90.0, 0.0, 0.0]
+    runs = []
+    for name, doc, extra in (("cross.fold", crossing, []), ("split.fold", split, [[50.0, 50.0]])):
+        path = tmp_path / name
+        path.write_text(json.dumps({"file_spec": 1.1, "frame_unit": "mm", "vertices_coords": coords + extra} | doc))
+        runs.append(fold_pattern(read_pattern(path), percent=1.0))
+    crossed, by_hand = runs
+    assert crossed.result.converged and by_hand.result.converged
+    assert crossed.mesh.n_faces == by_hand.mesh.n_faces
+    assert crossed.result.energy == pytest.approx(by_hand.result.energy, rel=1e-9)
+    said = [w for w in crossed.report["warnings"] if "cross or touch" in w]
+    assert said == [
+        "2 edge(s) cross or touch other edges away from a vertex (first cross.fold edge 6 and cross.fold edge 7, "
+        "near (50, 50) mm): split there, as a drawing's crossings are"
+    ]
+
+
 def test_another_tools_long_border_edges_are_split_as_a_drawings(tmp_path: Path) -> None:
     """A FOLD file from another tool draws a 120 × 40 mm sheet with border edges of 30–40 mm between the ends of
     three sine-shaped creases in 0.7 mm pieces. Read for folding (``read_pattern``, the Blender import alike), its

@@ -741,13 +741,6 @@ def test_fold_file_not_utf8(tmp_path: Path) -> None:
             None,
             r"pattern edges 4 \(sq\.fold edge 4\) and 5 \(sq\.fold edge 5\) join the same two vertices",
         ),
-        (
-            [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2], [1, 3]],
-            "BBBBVM",
-            None,
-            r"pattern edges 4 \(sq\.fold edge 4\) and 5 \(sq\.fold edge 5\) cross or touch near \(0\.5, 0\.5\) mm "
-            r"away from a vertex; a crease pattern's edges may meet only at their ends",
-        ),
     ],
 )
 def test_fold_file_geometry_that_cannot_be_meshed(tmp_path: Path, edges, assign, coords, message) -> None:

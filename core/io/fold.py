@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh, corner_angles, polygon_sides
-from ..pattern.discretize import segments_at_interval
+from ..pattern.discretize import segments_at_interval, with_crossings_split
 from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
 from .atomic import atomic_write_text
 from .fold_validate import load_fold_json
@@ -493,10 +493,11 @@ def pattern_for_folding(
 
 def another_tools_segments(doc: FoldDocument) -> CreasePattern:
     """Another tool's FOLD file as the straight segments it draws, before any sampling: its sliver facets left out
-    (:func:`_without_sliver_facets`) and its creases without a fold angle folding flat (:func:`_flat_foldable_angles`).
+    (:func:`_without_sliver_facets`), its creases without a fold angle folding flat (:func:`_flat_foldable_angles`)
+    and its edges that cross away from a vertex split there (:func:`..pattern.discretize.with_crossings_split`).
     What depends on the interval is done by :func:`..pattern.discretize.segments_at_interval`, at fold time in
     Blender (the import keeps these segments), so the Fold panel's Interval applies as ``--interval`` does."""
-    return fold_to_pattern(_flat_foldable_angles(_without_sliver_facets(doc)))
+    return with_crossings_split(fold_to_pattern(_flat_foldable_angles(_without_sliver_facets(doc))))
 
 
 def _flat_foldable_angles(doc: FoldDocument) -> FoldDocument:

@@ -764,6 +764,37 @@ def subdivide_straight_border(pattern: CreasePattern, interval: float | None = N
     return subdivide_edges(pattern, which, interval, least)
 
 
+def with_crossings_split(pattern: CreasePattern) -> CreasePattern:
+    """``pattern`` with its edges that cross or touch another away from a vertex split there, by the planar
+    clean-up a drawing gets (:func:`_planar_arrangement`, :func:`_remove_duplicates`, at the sheet's merge
+    tolerance), with a warning naming the first pair; for crease patterns read as segments (a FOLD file from
+    another tool). The FOLD spec takes a crease pattern as a planar graph, but a hand-made or scripted file may
+    draw two creases across each other as single edges, and was refused where its SVG twin folds (a designer
+    session). A pattern without such edges is returned as it is."""
+    size = pattern_sheet_size(pattern)
+    if not (size > 0 and math.isfinite(size)) or pattern.n_edges == 0:
+        return pattern
+    tol = default_parameters(size)[2]
+    rec = _split_records(pattern.vertices, pattern.edges, tol, pattern.assignments == "B")
+    if len(rec[0]) == 0:
+        return pattern
+    a, b = pattern.vertices[pattern.edges[:, 0]], pattern.vertices[pattern.edges[:, 1]]
+    pieces = _Pieces(a, b, pattern.edge_polyline, pattern.edge_from_curve, pattern.assignments, pattern.fold_angles)
+    warnings: list[str] = []
+    verts, edges, attrs = _planar_arrangement(pieces, tol, pattern.sources)
+    edges, attrs = _remove_duplicates(edges, attrs, pieces, pattern.sources, warnings)
+    split = np.unique(rec[0])
+    where = rec[3][0] if len(rec[3]) else pattern.vertices[rec[2][0]]
+    names = " and ".join(dict.fromkeys(pattern.sources[k] for k in pattern.edge_polyline[split[:2]].tolist()))
+    said = (
+        f"{len(split)} edge(s) cross or touch other edges away from a vertex (first {names}, near "
+        f"({where[0]:.4g}, {where[1]:.4g}) mm): split there, as a drawing's crossings are"
+    )
+    out = _with_edges(pattern, verts, edges, attrs)
+    out.warnings = [*pattern.warnings, said, *warnings]
+    return out
+
+
 def segments_at_interval(
     pattern: CreasePattern, interval: float | None = None, tolerance: float | None = None
 ) -> CreasePattern:

@@ -7,13 +7,14 @@ from __future__ import annotations
 import os
 
 import bpy
-from bpy.props import CollectionProperty, StringProperty
+from bpy.props import BoolProperty, CollectionProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper, poll_file_object_drop
 
-from ..scene import folding, import_curves
+from ..scene import import_curves
+from .job_modal import JobOperator
 
 
-class CURVED_FOLD_OT_import_pattern(bpy.types.Operator, ImportHelper):
+class CURVED_FOLD_OT_import_pattern(JobOperator, bpy.types.Operator, ImportHelper):
     """Import a crease pattern (SVG or FOLD) as crease curve objects"""
 
     bl_idname = "curved_fold.import_pattern"
@@ -23,6 +24,7 @@ class CURVED_FOLD_OT_import_pattern(bpy.types.Operator, ImportHelper):
         "pattern as curve objects, one per crease role and fold angle, ready to edit and fold"
     )
     bl_options = {"REGISTER", "UNDO", "PRESET"}
+    failure = "Import failed"
 
     filename_ext = ".svg"
     filter_glob: StringProperty(default="*.svg;*.fold", options={"HIDDEN"})
@@ -34,10 +36,23 @@ class CURVED_FOLD_OT_import_pattern(bpy.types.Operator, ImportHelper):
         options={"SKIP_SAVE"},
     )
 
+    browsed: BoolProperty(
+        name="From the File Browser",
+        description="Chosen in the file browser: import as a job in slices (Esc cancels), not in one call",
+        default=False,
+        options={"HIDDEN", "SKIP_SAVE"},
+    )
+
     def invoke(self, context, event):
         if self.properties.is_property_set("filepath") or self.files:  # a dropped file: no file browser
-            return self.execute(context)
+            return JobOperator.invoke(self, context, event)
+        self.browsed = True
         return ImportHelper.invoke(self, context, event)
+
+    def execute(self, context):
+        if self.browsed and not bpy.app.background and context.window is not None:
+            return self.start_modal(context)  # after the file browser: in slices, as a dropped file
+        return JobOperator.execute(self, context)
 
     def _paths(self) -> list[str]:
         names = [f.name for f in self.files if f.name]
@@ -45,19 +60,22 @@ class CURVED_FOLD_OT_import_pattern(bpy.types.Operator, ImportHelper):
             return [os.path.join(self.directory, name) for name in names]
         return [self.filepath]
 
-    def execute(self, context):
+    def make_job(self, context):
+        return import_curves.import_job(self._paths(), scene=context.scene)
+
+    def done(self, context, result):
+        imported, error = result
         made: list[bpy.types.Object] = []
-        for path in self._paths():
-            try:
-                objects, warnings = import_curves.import_crease_pattern(path, scene=context.scene)
-            except (*folding.engine_errors(), OSError) as exc:
-                self.report({"ERROR"}, f"Import failed: {exc}")
-                return {"CANCELLED"} if not made else {"FINISHED"}
+        for path, objects, warnings in imported:
             made.extend(objects)
             for warning in warnings[:5]:
                 self.report({"WARNING"}, warning)
             coll = objects[0].users_collection[0].name
             self.report({"INFO"}, f"Imported {os.path.basename(path)} as {len(objects)} curve object(s) in '{coll}'")
+        if error is not None:
+            self.report({"ERROR"}, f"Import failed: {error}")
+        if not made:
+            return {"CANCELLED"}
         for other in context.selected_objects:
             other.select_set(False)
         for ob in made:

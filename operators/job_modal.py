@@ -24,7 +24,8 @@ class JobOperator:
     def make_job(self, context) -> jobs.Job:  # pragma: no cover - every subclass defines it
         raise NotImplementedError
 
-    def done(self, context, result) -> None:  # pragma: no cover - every subclass defines it
+    def done(self, context, result) -> set[str] | None:  # pragma: no cover - every subclass defines it
+        """Report what the job's commit returned; the operator's result if not ``{"FINISHED"}``."""
         raise NotImplementedError
 
     def _fail(self, exc: BaseException) -> set[str]:
@@ -37,12 +38,15 @@ class JobOperator:
             result = jobs.run_to_end(job)
         except folding.engine_errors() as exc:
             return self._fail(exc)
-        self.done(context, result)
-        return {"FINISHED"}
+        return self.done(context, result) or {"FINISHED"}
 
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
             return self.execute(context)
+        return self.start_modal(context)
+
+    def start_modal(self, context):
+        """Start the job in slices on a window timer (``invoke``, or an ``execute`` after a file browser)."""
         try:
             self._job = jobs.start(self.make_job(context))
         except folding.engine_errors() as exc:
@@ -95,8 +99,7 @@ class JobOperator:
             self._status(context)
             return {"RUNNING_MODAL"}
         self._end_ui(context)
-        self.done(context, job.result)
-        return {"FINISHED"}
+        return self.done(context, job.result) or {"FINISHED"}
 
     def cancel(self, context):
         if self._job is not None:

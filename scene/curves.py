@@ -520,29 +520,14 @@ def _object_name(role: str, angle: float | None) -> str:
     return role.title()
 
 
-def objects_from_curves(
-    curves: Iterable[CreaseCurve],
-    collection: bpy.types.Collection,
-    unit_scale: float | None = None,
-    *,
-    import_name: str = "pattern",
-    pattern=None,
-    segments: bool = False,
-) -> list[bpy.types.Object]:
-    """The crease curves as a handful of curve objects in ``collection``: one per role and fold angle.
+Chained = tuple[dict[tuple[str, float | None], list[list[tuple[int, bool]]]], float]
+"""Strokes grouped by role and fold angle, each group's chains (``exact_curves.chain_strokes``), and the quantum
+(mm) their ends were matched to: what :func:`objects_from_curves` writes as curve objects."""
 
-    Strokes of one role and angle joined end to end become one spline (``exact_curves.chain_strokes``): a Poly
-    spline when they are all lines (lines stay lines), else a Bézier spline (cubics exactly, arcs as ≤ 90° cubic
-    pieces). The exact strokes are stored on each curve datablock (``exact_curves``) so that reading the objects
-    back gives the file's own curves, in file order, while the splines are unedited. Objects sit at the origin in
-    the XY plane; ``unit_scale`` is Blender units per mm (scene default). Creates nothing if a curve is unusable.
 
-    ``pattern`` is the discretised pattern the curves were chained from (a FOLD file): stored too, so that the
-    unedited objects fold to that very pattern (:func:`stored_pattern`), as the command line folds a FOLD file.
-    ``segments``: ``pattern`` is another tool's segments, not yet sampled; a fold samples them at its interval.
-    """
-    curves = list(curves)
-    scale = default_unit_scale() if unit_scale is None else float(unit_scale)
+def chain_steps(curves: list[CreaseCurve]) -> Generator[str, None, Chained]:
+    """The curve objects an import makes of ``curves``, worked out without touching the scene, a group per unit of
+    work (an import job's slices): one group per role and fold angle, its strokes chained end to end."""
     groups: dict[tuple[str, float | None], list[int]] = {}
     for i, curve in enumerate(curves):
         where = curve.source or f"curve {i}"
@@ -556,18 +541,55 @@ def objects_from_curves(
             angle = None
         groups.setdefault((role, None if angle is None else float(angle)), []).append(i)
     if not curves:
-        return []
+        return {}, 1e-9
     every = np.concatenate([s.points for c in curves for s in c.segments])
     quantum = max(float(np.ptp(every, axis=0).max()), 1.0) * 1e-9
+    chains = {}
+    for key, indices in groups.items():
+        chains[key] = exact_curves.chain_strokes(curves, indices, quantum)
+        yield "chains"
+    return chains, quantum
+
+
+def objects_from_curves(
+    curves: Iterable[CreaseCurve],
+    collection: bpy.types.Collection,
+    unit_scale: float | None = None,
+    *,
+    import_name: str = "pattern",
+    pattern=None,
+    segments: bool = False,
+    chained: Chained | None = None,
+) -> list[bpy.types.Object]:
+    """The crease curves as a handful of curve objects in ``collection``: one per role and fold angle.
+
+    Strokes of one role and angle joined end to end become one spline (``exact_curves.chain_strokes``): a Poly
+    spline when they are all lines (lines stay lines), else a Bézier spline (cubics exactly, arcs as ≤ 90° cubic
+    pieces). The exact strokes are stored on each curve datablock (``exact_curves``) so that reading the objects
+    back gives the file's own curves, in file order, while the splines are unedited. Objects sit at the origin in
+    the XY plane; ``unit_scale`` is Blender units per mm (scene default). Creates nothing if a curve is unusable.
+
+    ``pattern`` is the discretised pattern the curves were chained from (a FOLD file): stored too, so that the
+    unedited objects fold to that very pattern (:func:`stored_pattern`), as the command line folds a FOLD file.
+    ``segments``: ``pattern`` is another tool's segments, not yet sampled; a fold samples them at its interval.
+    ``chained``: :func:`chain_steps`' result, if the caller worked it out already (an import job).
+    """
+    curves = list(curves)
+    scale = default_unit_scale() if unit_scale is None else float(unit_scale)
+    if chained is None:
+        chained = run_to_end(chain_steps(curves))
+    if not curves:
+        return []
+    groups, quantum = chained
     import_id = exact_curves.new_import_id(import_name)
     made: list[bpy.types.Object] = []
     try:
-        for (role, angle), indices in groups.items():
+        for (role, angle), chains in groups.items():
             name = _object_name(role, angle)
             cu = bpy.data.curves.new(name, type="CURVE")
             cu.dimensions = "2D"
             stored: list[list[exact_curves.Stroke]] = []
-            for chain in exact_curves.chain_strokes(curves, indices, quantum):
+            for chain in chains:
                 strokes = [
                     exact_curves.Stroke(
                         i, curves[i].source, bool(curves[i].closed), rev, list(curves[i].segments), curves[i].sampled

@@ -458,3 +458,72 @@ def test_a_bake_folds_keyed_settings_as_playback_does(folded, extension):
         scene.frame_set(f)
         assert np.abs(evaluated_mm(ob) - shape).max() <= 1e-3 * np.ptp(shape, axis=0).max(), f
     assert not type(props).bl_rna.properties["fold_angle"].is_animatable
+
+
+def test_an_import_runs_in_slices_and_esc_leaves_the_scene_as_it_was(extension, clean_scene, monkeypatch):
+    """Importing CircularPleat-antiFacet (3,200 lines) took ~190 ms in one call, Blender frozen. The Import
+    operator now runs a job: the file's elements a few hundred per unit, then each role's strokes chained, and only
+    the commit makes the objects. Esc between slices leaves the scene exactly as it was; run to its end, the job
+    makes what the one-call import makes."""
+    from .conftest import FIXTURES
+
+    jobs = mod(extension, "scene.jobs")
+    import_curves = mod(extension, "scene.import_curves")
+    job_modal = mod(extension, "operators.job_modal")
+    path = str(FIXTURES / "origami-simulator" / "CircularPleat-antiFacet.svg")
+
+    def scene_state():
+        return (
+            sorted(bpy.data.objects.keys()),
+            sorted(bpy.data.curves.keys()),
+            sorted(bpy.data.collections.keys()),
+            sorted(bpy.data.materials.keys()),
+        )
+
+    before = scene_state()
+    job = jobs.start(import_curves.import_job([path], scene=clean_scene))
+    slices = 0
+    while not jobs.run_slice(job, budget_ms=0.0):  # one unit per slice
+        slices += 1
+        assert scene_state() == before  # nothing written before the commit
+        if slices == 8:
+            assert job.progress.stage == "read" and "reading" in job.status()
+            jobs.cancel(job)
+            break
+    assert job.state == "cancelled" and scene_state() == before
+    job = jobs.start(import_curves.import_job([path], scene=clean_scene))
+    units = 0
+    while not jobs.run_slice(job, budget_ms=0.0):
+        units += 1
+    assert units >= 3200 // 250  # the elements a few hundred at a time, then the chains
+    [(_, objects, _)], error = job.result
+    assert error is None
+    made = {ob.name: len(ob.data.splines) for ob in objects}
+    for ob in objects:
+        bpy.data.objects.remove(ob)
+    one_call, _ = import_curves.import_crease_pattern(path, scene=clean_scene)
+    assert {ob.name.split(".")[0]: len(ob.data.splines) for ob in one_call} == {
+        name.split(".")[0]: n for name, n in made.items()
+    }
+
+    # Through the operator's modal handler: Esc cancels, timer ticks run the job to its end and select the objects.
+    reports = []
+
+    class Runner(job_modal.JobOperator):
+        def report(self, kind, text):
+            reports.append((next(iter(kind)), text))
+
+        done = mod(extension, "operators.import_pattern").CURVED_FOLD_OT_import_pattern.done
+
+    monkeypatch.setattr(jobs, "SLICE_MS", 0.0)
+    before = scene_state()
+    runner = Runner()
+    runner._job = jobs.start(import_curves.import_job([path], scene=clean_scene))
+    assert runner.modal(bpy.context, _Event("TIMER")) == {"RUNNING_MODAL"}
+    assert runner.modal(bpy.context, _Event("ESC", "PRESS")) == {"CANCELLED"} and scene_state() == before
+    runner._job = jobs.start(import_curves.import_job([path, path + ".missing.svg"], scene=clean_scene))
+    while (state := runner.modal(bpy.context, _Event("TIMER"))) == {"RUNNING_MODAL"}:
+        pass
+    assert state == {"FINISHED"}  # the first file imported, the second reported
+    assert [k for k, _ in reports].count("ERROR") == 1 and "Import failed" in reports[-1][1]
+    assert len(bpy.context.selected_objects) == len(objects)

@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import os
 import stat
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 from pathlib import Path
 
+from .. import run_to_end
 from ..pattern.discretize import discretize
 from ..pattern.model import CreaseCurve, CreasePattern, PatternError
 from . import limits
@@ -102,14 +103,22 @@ def read_curves(path: str | os.PathLike[str], *, collection: str | None = None) 
     """The crease curves of a file and the warnings met reading them: exact curves from .svg and .blend, polylines
     (segments chained through vertices where two meet, ``core.pattern.polylines``) from .fold. ``collection``: of a
     .blend file, the curves of that collection only (else those of its scene)."""
+    return run_to_end(read_curves_steps(path, collection=collection))
+
+
+def read_curves_steps(
+    path: str | os.PathLike[str], *, collection: str | None = None
+) -> Generator[str, None, tuple[list[CreaseCurve], list[str]]]:
+    """:func:`read_curves` in units of work: an SVG's elements a few hundred at a time (a Blender import runs them
+    in a job's slices), another file in one."""
     p = Path(path)
     suffix = _suffix(p)
     if collection is not None and suffix != ".blend":
         raise PatternError(f"{p.name}: only a .blend file has collections to choose from ('{collection}')")
     if suffix == ".svg":
-        from .svg import read_svg
+        from .svg import read_svg_steps
 
-        drawing = read_svg(p)
+        drawing = yield from read_svg_steps(p)
         return drawing.curves, list(drawing.warnings)
     if suffix == ".blend":
         return _blend_curves(p, collection)

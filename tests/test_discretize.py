@@ -23,6 +23,7 @@ from curved_fold.core.pattern.discretize import (
 )
 from curved_fold.core.pattern.model import CreaseCurve, CurveSegment, PatternError
 from curved_fold.core.pattern.polylines import flattened_curves
+from curved_fold.core.pipeline import fold_pattern
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 FIXTURE_FILES = sorted(FIXTURES.glob("*.svg")) if FIXTURES.is_dir() else []
@@ -193,6 +194,63 @@ def test_border_open_at_several_places_is_reported() -> None:
     p = discretize(sides, interval=100, tolerance=1)
     assert any("border is not closed: 4 loose end(s)" in w for w in p.warnings), p.warnings
     assert not any("joined its loose ends" in w for w in p.warnings)
+
+
+def _one_loop(p) -> bool:
+    degree = np.bincount(p.edges[p.assignments == "B"].ravel(), minlength=p.n_vertices)
+    return set(degree[degree > 0].tolist()) == {2}
+
+
+def test_border_pieces_that_miss_at_several_corners_by_a_hair_are_joined() -> None:
+    """A 150 mm square drawn as four lines that miss each other by 0.1 mm at every corner (a designer session, in
+    Blender and as SVG <line>s): left open, two such gaps folded nothing ("converged" in 0 iterations, no crease
+    with paper on both sides) and four gave "no paper left". Each pair of loose ends that are each other's nearest,
+    within 1 % of the sheet, is joined."""
+    sides = [
+        CreaseCurve([line((0.1, 0), (150, 0))], "B", None, source="bottom"),
+        CreaseCurve([line((150, 0.1), (150, 150))], "B", None, source="right"),
+        CreaseCurve([line((149.9, 150), (0, 150))], "B", None, source="top"),
+        CreaseCurve([line((0, 149.9), (0, 0.1))], "B", None, source="left"),
+    ]
+    crease = CreaseCurve([line((0, 0), (150, 150))], "V", 90.0, source="diagonal")
+    p = discretize([*sides, crease])
+    assert _one_loop(p)
+    said = [w for w in p.warnings if "not closed" in w]
+    assert len(said) == 1 and said[0].startswith("the border is not closed at 4 places (bottom, left, right, top)")
+    assert "up to 0.1414 mm long" in said[0]
+    run = fold_pattern(p, percent=0.5)
+    assert run.result.converged and run.report["crease_length_not_folding_pct"] == 0
+
+
+def test_border_drawn_past_its_corners_is_trimmed() -> None:
+    """Four border lines drawn 0.3 mm past the corners of a 150 mm square (by eye, or a CAD program's lines) crossed
+    each other at every corner and the pattern was refused ("the border crosses or touches itself"); a stroke drawn
+    past its own start was closed with a chord along itself and then reported open. Stubs of the border up to 1 %
+    of the sheet beyond where it meets itself are trimmed, with one warning."""
+    sides = [
+        CreaseCurve([line((-0.3, 0), (150.3, 0))], "B", None, source="bottom"),
+        CreaseCurve([line((150, -0.3), (150, 150.3))], "B", None, source="right"),
+        CreaseCurve([line((150.3, 150), (-0.3, 150))], "B", None, source="top"),
+        CreaseCurve([line((0, 150.3), (0, -0.3))], "B", None, source="left"),
+    ]
+    crease = CreaseCurve([line((0, 0), (150, 150))], "V", 90.0, source="diagonal")
+    p = discretize([*sides, crease])
+    assert _one_loop(p) and p.vertices.min() == 0.0 and p.vertices.max() == 150.0
+    assert [w for w in p.warnings if "border" in w] == [
+        "trimmed 8 border stub(s) drawn past where the outline meets itself, up to 0.3 mm long, from bottom, right, "
+        "top, left"
+    ]
+    past = CreaseCurve(
+        [line((0, 0), (150, 0)), line((150, 0), (150, 150)), line((150, 150), (0, 150)), line((0, 150), (0, -0.5))],
+        "B",
+        None,
+        source="outline",
+    )
+    p = discretize([past, crease])
+    assert _one_loop(p)
+    assert [w for w in p.warnings if "border" in w] == [
+        "trimmed 1 border stub(s) drawn past where the outline meets itself, up to 0.5 mm long, from outline"
+    ]
 
 
 @pytest.mark.slow

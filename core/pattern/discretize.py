@@ -1399,17 +1399,25 @@ def _outer_boundary(verts: np.ndarray, e: np.ndarray, core: np.ndarray) -> np.nd
     return on
 
 
-def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnings: list[str]) -> list[CreaseCurve]:
-    """Close a border left open at one place: when the border strokes together have exactly two loose ends (ends
-    that meet no other border end within ``merge_tolerance``), a straight border stroke joins them, with a warning.
+def _close_open_border(
+    curves: list[CreaseCurve], merge_tolerance: float, reach: float, warnings: list[str]
+) -> list[CreaseCurve]:
+    """Close a border left open: when the border strokes together have exactly two loose ends (ends that meet no
+    other border end within ``merge_tolerance``), a straight border stroke joins them; with more, each pair of
+    loose ends that are each other's nearest and within ``reach`` (:data:`SHORT_OF_BORDER_FRACTION` of the sheet)
+    is joined, as long as no other border stroke passes nearer to either end (:func:`_pairs_of_gaps`); with a
+    warning.
 
     A rectangle drawn as four points with Cyclic forgotten, or an outline whose last point misses its first by a
     fraction of a millimetre, is what the designer sees as the sheet's outline; left open, the border separated no
     paper from outside, so the crease nearest the gap became the sheet's edge and the strip beyond it was dropped.
-    Borders open at several places are left as they are (which ends belong together is a guess) and warned about
-    where the segments are clipped. A black line whose loose end lies on or inside a closed border stroke (a slit
-    from the edge, a line across or inside the sheet) is no gap in the outline: :func:`_stray_border_as_cuts` makes
-    it a cut (closing it drew a straight chord across the sheet that was never drawn)."""
+    A square drawn as four lines that miss each other by 0.1 mm at two corners was left open (a designer session:
+    "converged" in 0 iterations, no crease with paper on both sides; at four corners "no paper left"). An end that
+    lies nearer another border stroke than any loose end overshoots it (lines drawn past the corners): it is no gap,
+    and the stub is trimmed later (:func:`_trim_border_stubs`). A black line whose loose end lies on or inside a
+    closed border stroke (a slit from the edge, a line across or inside the sheet) is no gap in the outline:
+    :func:`_stray_border_as_cuts` makes it a cut (closing it drew a straight chord across the sheet that was never
+    drawn)."""
     ends = [
         (k, side, c.segments[0].points[0] if side == 0 else c.segments[-1].points[-1])
         for k, c in enumerate(curves)
@@ -1420,22 +1428,102 @@ def _close_open_border(curves: list[CreaseCurve], merge_tolerance: float, warnin
         return curves
     pts = np.array([p for _, _, p in ends], dtype=np.float64)
     loose = np.flatnonzero(_ends_met(pts, merge_tolerance) % 2 == 0)  # an end met an odd number of times is joined
-    if len(loose) != 2 or _on_or_inside_closed_border(pts[loose], curves, SNAP_FACTOR * merge_tolerance).any():
+    if len(loose) < 2 or _on_or_inside_closed_border(pts[loose], curves, SNAP_FACTOR * merge_tolerance).any():
         return curves
-    a, b = pts[loose[0]], pts[loose[1]]
-    gap = float(np.hypot(*(b - a)))
-    if gap <= merge_tolerance:
+    pairs = _pairs_of_gaps(curves, ends, pts, loose, merge_tolerance, reach)
+    closing, gaps, names = [], [], set()
+    for i, j in pairs:
+        a, b = pts[i], pts[j]
+        gap = float(np.hypot(*(b - a)))
+        if gap <= merge_tolerance:
+            continue
+        here = sorted({curves[ends[x][0]].source or f"curve {ends[x][0]}" for x in (i, j)})
+        names.update(here)
+        gaps.append((a, b, gap))
+        closing.append(
+            CreaseCurve(
+                [CurveSegment("line", np.array([a, b]))],
+                "B",
+                None,
+                source=f"the straight edge closing {' and '.join(here)}",
+            )
+        )
+    if not closing:
         return curves
-    names = sorted({curves[ends[i][0]].source or f"curve {ends[i][0]}" for i in loose})
-    closing = CreaseCurve(
-        [CurveSegment("line", np.array([a, b]))], "B", None, source=f"the straight edge closing {' and '.join(names)}"
-    )
-    warnings.append(
-        f"the border is not closed ({', '.join(names)}): joined its loose ends at ({a[0]:.3f}, {a[1]:.3f}) and "
-        f"({b[0]:.3f}, {b[1]:.3f}) mm with a straight edge, {gap:.4g} mm long (close the outline where you drew it, "
-        "e.g. Cyclic in Blender, Z in SVG)"
-    )
-    return [*curves, closing]
+    shown = sorted(names)
+    listed = ", ".join(shown[:4]) + (f" and {len(shown) - 4} more" if len(shown) > 4 else "")
+    if len(gaps) == 1:
+        ((a, b, gap),) = gaps
+        warnings.append(
+            f"the border is not closed ({listed}): joined its loose ends at ({a[0]:.3f}, {a[1]:.3f}) and "
+            f"({b[0]:.3f}, {b[1]:.3f}) mm with a straight edge, {gap:.4g} mm long (close the outline where you drew "
+            "it, e.g. Cyclic in Blender, Z in SVG)"
+        )
+    else:
+        where = ", ".join(f"({a[0]:.3f}, {a[1]:.3f})" for a, _, _ in gaps[:4]) + (", ..." if len(gaps) > 4 else "")
+        warnings.append(
+            f"the border is not closed at {len(gaps)} places ({listed}): joined each pair of loose ends with a "
+            f"straight edge, up to {max(g for _, _, g in gaps):.4g} mm long, at {where} mm (make the pieces of the "
+            "outline meet where you drew them)"
+        )
+    return [*curves, *closing]
+
+
+MAX_GAP_ENDS = 400
+"""Loose border ends beyond which :func:`_pairs_of_gaps` pairs none (its distances are all pairs)."""
+
+
+def _pairs_of_gaps(
+    curves: list[CreaseCurve],
+    ends: list[tuple[int, int, np.ndarray]],
+    pts: np.ndarray,
+    loose: np.ndarray,
+    merge_tolerance: float,
+    reach: float,
+) -> list[tuple[int, int]]:
+    """Pairs of ``loose`` border ends (indices into ``ends``/``pts``) to join. Two loose ends are joined unless one
+    lies on another border piece (within the merge tolerance: a stroke drawn past its own start ends on it). Of
+    more, each pair that are each other's nearest, within ``reach``, and nearer to each other than to any other
+    border piece (an end nearer another piece overshoots it: the border drawn past a corner; its stub is trimmed
+    later, :func:`_trim_border_stubs`). Also for two ends within ``reach`` of each other."""
+    if len(loose) > MAX_GAP_ENDS:
+        return []
+    q = pts[loose]
+    d = np.hypot(*(q[:, None, :] - q[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    nearest = np.argmin(d, axis=1)
+    # every border piece sampled, each with its stroke and segment, so an end is measured against all but its own
+    seg_a, seg_b, whose = [], [], []
+    for k, c in enumerate(curves):
+        if c.assignment != "B":
+            continue
+        for g, seg in enumerate(c.segments):
+            line = seg.evaluate(np.linspace(0.0, 1.0, 33))
+            seg_a.append(line[:-1])
+            seg_b.append(line[1:])
+            whose += [(k, g)] * 32
+    a_all, b_all = np.concatenate(seg_a), np.concatenate(seg_b)
+    stroke = np.array([k for k, _ in whose], dtype=np.int64)
+    piece = np.array([g for _, g in whose], dtype=np.int64)
+
+    def nearest_other_piece(x: int) -> float:
+        k, side, p = ends[int(loose[x])]
+        own = (stroke == k) & (piece == (0 if side == 0 else len(curves[k].segments) - 1))
+        if own.all():
+            return math.inf
+        other = ~own
+        return float(point_segment_distance(np.broadcast_to(p, a_all[other].shape), a_all[other], b_all[other]).min())
+
+    pairs = []
+    for a in range(len(loose)):
+        b = int(nearest[a])
+        if b <= a or nearest[b] != a or (len(loose) > 2 and d[a, b] > reach):
+            continue
+        near = min(nearest_other_piece(a), nearest_other_piece(b))
+        if near <= merge_tolerance or (d[a, b] <= reach and near + merge_tolerance < d[a, b]):
+            continue
+        pairs.append((int(loose[a]), int(loose[b])))
+    return pairs
 
 
 def _on_or_inside_closed_border(points: np.ndarray, curves: list[CreaseCurve], tol: float) -> np.ndarray:
@@ -1473,6 +1561,7 @@ def _clip_to_border(
     """Step 4: refuse a self-crossing border, warn about an open one, remove crease pieces outside a closed one and
     move crease ends just short of it onto it (:func:`_snap_short_ends`; ``size``: the sheet's)."""
     attrs = _stray_border_as_cuts(verts, edges, attrs, pieces, sources, warnings)
+    edges, attrs = _trim_border_stubs(verts, edges, attrs, pieces, sources, SHORT_OF_BORDER_FRACTION * size, warnings)
     assign, edge_poly = pieces.assignment, pieces.polyline
     is_b = assign[attrs] == "B"
     if not is_b.any():
@@ -1507,6 +1596,55 @@ def _clip_to_border(
         keep[outside] = False
         edges, attrs = edges[keep], attrs[keep]
     return _snap_short_ends(verts, edges, attrs, pieces, sources, size, merge_tolerance, warnings)
+
+
+def _trim_border_stubs(
+    verts: np.ndarray,
+    edges: np.ndarray,
+    attrs: np.ndarray,
+    pieces: _Pieces,
+    sources: list[str],
+    reach: float,
+    warnings: list[str],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Remove the border's stubs: a run of border pieces from a loose end to where three or more border pieces
+    meet, at most ``reach`` long (:data:`SHORT_OF_BORDER_FRACTION` of the sheet), with a warning. A square drawn
+    as four lines 0.3 mm past its corners (by eye, or a CAD program's lines) crosses itself at every corner and was
+    refused ("the border crosses or touches itself"), where a crease drawn past the border is trimmed."""
+    is_b = pieces.assignment[attrs] == "B"
+    if not is_b.any():
+        return edges, attrs
+    b_idx = np.flatnonzero(is_b)
+    deg = np.bincount(edges[b_idx].ravel(), minlength=len(verts))
+    incident: dict[int, list[int]] = {}
+    for k in b_idx.tolist():
+        for v in edges[k].tolist():
+            incident.setdefault(v, []).append(k)
+    drop: list[int] = []
+    lengths: list[float] = []
+    for start in np.flatnonzero(deg == 1).tolist():
+        run, v, length = [], start, 0.0
+        k = incident[start][0]
+        while True:
+            run.append(k)
+            w = int(edges[k, 0] if edges[k, 1] == v else edges[k, 1])
+            length += float(np.hypot(*(verts[w] - verts[v])))
+            if length > reach or deg[w] != 2:
+                break
+            v, k = w, next(e for e in incident[w] if e != k)
+        if length <= reach and deg[w] >= 3:
+            drop += run
+            lengths.append(length)
+    if not drop:
+        return edges, attrs
+    keep = np.ones(len(edges), dtype=bool)
+    keep[drop] = False
+    names = _describe_sources(sources, pieces.polyline[attrs[drop]])
+    warnings.append(
+        f"trimmed {len(lengths)} border stub(s) drawn past where the outline meets itself, up to "
+        f"{max(lengths):.3g} mm long, from {names}"
+    )
+    return edges[keep], attrs[keep]
 
 
 class _EndMover:
@@ -1929,7 +2067,7 @@ def discretize_steps(
     _check_coordinates(curves)
     warnings: list[str] = []
     interval, tolerance, merge_tolerance = _resolve_parameters(curves, interval, tolerance, merge_tolerance, warnings)
-    curves = _close_open_border(curves, merge_tolerance, warnings)
+    curves = _close_open_border(curves, merge_tolerance, SHORT_OF_BORDER_FRACTION * sheet_size(curves), warnings)
     sources = [c.source or f"curve {k}" for k, c in enumerate(curves)]
     interval, tolerance = _guard_explosion(curves, interval, tolerance, warnings)
     yield "parameters"

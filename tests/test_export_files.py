@@ -5,6 +5,7 @@ installed. Real bpy, a real fold of a vendored pattern."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import struct
@@ -284,6 +285,24 @@ def test_svg_export_of_a_finely_sampled_curve_reads_back_vertex_for_vertex(empty
     assert np.max(np.min(np.linalg.norm(a[:, None] - b[None], axis=2), axis=1)) < 1e-9
     assert again.result.iterations == run.result.iterations
     assert again.result.energy == pytest.approx(run.result.energy, rel=1e-9)
+
+
+def test_svg_export_border_chords_longer_than_the_interval_read_back_as_written(empty_scene, tmp_path):
+    """A designer session's Blender fold (a Bézier circle border, a valley ending at 41°): where the crease meets
+    the border, a border sample beside the junction is dropped and the chord there is 10.001 mm at a 10 mm
+    interval. Its export read back split that chord again (158 → 160 faces). Our polylines' pieces are the meshed
+    pattern's and are not split again; the same ring drawn by hand still is."""
+    ring = [(100.0 * math.cos(t), 100.0 * math.sin(t)) for t in np.linspace(0.0, 2 * math.pi, 64)]
+    ring[-1] = ring[0]
+    points = " ".join(f"{x!r},{-y!r}" for x, y in ring)
+    interval = 0.9999 * math.dist(ring[0], ring[1])  # every chord of the ring a hair longer than the interval
+    body = f'stroke="#000000" fill="none" points="{points}"/></svg>'
+    head = '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="-100 -100 200 200">'
+    (tmp_path / "ours.svg").write_text(head + '<polyline data-curved-fold="sampled" ' + body)
+    (tmp_path / "drawn.svg").write_text(head + "<polyline " + body)
+    ours, drawn = (read_pattern(tmp_path / name, interval=interval) for name in ("ours.svg", "drawn.svg"))
+    assert ours.n_edges == len(ring) - 1
+    assert drawn.n_edges > len(ring) - 1
 
 
 def test_svg_cutter_layout_has_cut_and_score_layers(empty_scene, tmp_path):

@@ -2106,7 +2106,10 @@ def discretize_steps(
     # step 6: border and cut pieces drawn straight, between junctions, split evenly (a flattened curve's too: its
     # chords can be far longer than the interval, and the rulings need border vertices to end at; a cut is two
     # borders once cut open, and a lone slit needs a vertex inside to open at all)
-    drawn_straight = np.isin(assignment, ("B", "C")) & ~pieces.from_curve[attrs]
+    # (not our SVG export's polylines: they are the meshed pattern's pieces, read back as written; a chord a curve's
+    # junction lengthened to 10.001 mm at a 10 mm interval was split again and the file meshed otherwise)
+    sampled = np.array([c.sampled for c in curves], dtype=bool)[pieces.polyline[attrs]]
+    drawn_straight = np.isin(assignment, ("B", "C")) & ~pieces.from_curve[attrs] & ~sampled
     least = np.where(_lone_slits(edges, assignment), 2, 1)
     verts, edges, kept = _subdivide_straight(verts, edges, np.arange(len(edges)), drawn_straight, interval, least)
     attrs, from_curve = attrs[kept], from_curve[kept]

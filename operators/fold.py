@@ -90,7 +90,7 @@ class CURVED_FOLD_OT_fold(JobOperator, bpy.types.Operator):
             coll = bpy.data.collections.get(self.collection)
             if coll is None:
                 raise folding.PatternError(f"no collection named '{self.collection}'")
-            return coll, folding.curve_objects(coll.all_objects)
+            return coll, folding.shown_crease_curves(coll)[0]
         return None, folding.curve_objects(context.selected_objects or [])
 
     def make_job(self, context):

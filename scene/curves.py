@@ -72,6 +72,58 @@ def curve_objects(objects) -> list[bpy.types.Object]:
     return out
 
 
+def shown_crease_curves(collection: bpy.types.Collection, layer=None) -> tuple[list[bpy.types.Object], list[str]]:
+    """The crease curves of ``collection`` (and the collections in it) that the viewport shows, and a warning naming
+    those it hides: hidden (H) or disabled in viewports, or in a collection inside ``collection`` that is hidden,
+    disabled or excluded in the view layer ``layer`` (default: the current one). A fold of a collection folds what
+    the designer sees (a crease hidden with H, or in a hidden sub-collection, was folded too; a designer session);
+    the chosen collection's own visibility does not count, it was chosen. The command line reads a .blend file's
+    collection the same way (:func:`_blend_objects`)."""
+    if layer is None:
+        layer = getattr(bpy.context, "view_layer", None)
+    every = curve_objects(collection.all_objects)
+    hidden = _hidden_below(collection, layer)
+    kept = [ob for ob in every if ob.name not in hidden]
+    left = [ob.name for ob in every if ob.name in hidden]
+    notes = []
+    if left:
+        notes.append(
+            f"{len(left)} hidden crease curve(s) of '{collection.name}' left out: "
+            + ", ".join(f"'{n}'" for n in left[:10])
+            + (", ..." if len(left) > 10 else "")
+            + " (show them to fold them)"
+        )
+    return kept, notes
+
+
+def _hidden_below(collection: bpy.types.Collection, layer) -> set[str]:
+    """Names of the objects of ``collection`` the viewport hides in the view layer ``layer``: hidden (H), disabled
+    in viewports, or in a collection below ``collection`` that is excluded, hidden or disabled there."""
+    hidden = {ob.name for ob in collection.all_objects if ob.hide_viewport or _hidden_in(ob, layer)}
+    top = _layer_collection(layer.layer_collection, collection) if layer is not None else None
+    if top is None:
+        return hidden
+    stack = [(child, False) for child in top.children]
+    while stack:
+        lc, unseen = stack.pop()
+        unseen = unseen or lc.exclude or lc.hide_viewport or lc.collection.hide_viewport
+        if unseen:
+            hidden.update(ob.name for ob in lc.collection.objects)
+        stack.extend((child, unseen) for child in lc.children)
+    return hidden
+
+
+def _layer_collection(root, collection: bpy.types.Collection):
+    """The layer collection of ``collection`` under ``root`` (a view layer's tree), or None."""
+    stack = [root]
+    while stack:
+        lc = stack.pop()
+        if lc.collection == collection:
+            return lc
+        stack.extend(lc.children)
+    return None
+
+
 def _role_and_angle(ob: bpy.types.Object) -> tuple[str, float]:
     props = getattr(ob, "curved_fold", None)
     if props is None:
@@ -425,11 +477,29 @@ def _blend_objects(path: Path, data, scene, collection: str | None, warnings: li
             shown = ", ".join(f"'{n}'" for n in names[:10]) + (", ..." if len(names) > 10 else "")
             raise PatternError(f"{path.name}: no collection named '{collection}' (the file has {shown or 'none'})")
         members = {ob.name for ob in chosen.all_objects}
-        kept = [ob for ob in curves if ob.name in members]
+        layer = scene.view_layers[0] if scene is not None and scene.view_layers else None
+        hidden = _hidden_below(chosen, layer)
+        kept = [ob for ob in curves if ob.name in members and ob.name not in hidden]
+        unseen = [ob.name for ob in curves if ob.name in members and ob.name in hidden]
+        if unseen:
+            warnings.append(
+                f"{len(unseen)} hidden crease curve(s) of '{collection}' left out: "
+                + ", ".join(f"'{n}'" for n in unseen[:10])
+                + (", ..." if len(unseen) > 10 else "")
+                + " (show them to fold them)"
+            )
     elif scene is not None:
-        visible, excluded = _shown_in(scene)
-        kept = [ob for ob in curves if ob.name in visible]
+        visible, excluded, hidden = _shown_in(scene)
+        kept = [ob for ob in curves if ob.name in visible and ob.name not in hidden]
         left = [ob.name for ob in curves if ob.name not in visible]
+        unseen = [ob.name for ob in curves if ob.name in visible and ob.name in hidden]
+        if unseen:
+            warnings.append(
+                f"{len(unseen)} hidden crease curve(s) of scene '{scene.name}' left out: "
+                + ", ".join(f"'{n}'" for n in unseen[:10])
+                + (", ..." if len(unseen) > 10 else "")
+                + " (show them to fold them)"
+            )
         if left:
             where = (
                 f" (in {', '.join(repr(c.name) for c in excluded)}, excluded from the view layer)" if excluded else ""
@@ -455,22 +525,38 @@ def _blend_objects(path: Path, data, scene, collection: str | None, warnings: li
     return kept
 
 
-def _shown_in(scene) -> tuple[set[str], list[bpy.types.Collection]]:
-    """The names of the objects ``scene`` shows — in its collection or in one not excluded (the checkbox) from its
-    first view layer, nor inside an excluded one — and the excluded collections (one walk of the layer tree)."""
+def _shown_in(scene) -> tuple[set[str], list[bpy.types.Collection], set[str]]:
+    """The names of the objects ``scene`` holds — in its collection or in one not excluded (the checkbox) from its
+    first view layer, nor inside an excluded one —, the excluded collections (one walk of the layer tree), and the
+    names of those of them the viewport hides: hidden (H) or disabled in viewports, or in a collection hidden or
+    disabled there (as ``Object.visible_get`` tells in Blender, which a linked file's objects cannot be asked)."""
     if not scene.view_layers:
-        return {ob.name for ob in scene.collection.all_objects}, []
+        return {ob.name for ob in scene.collection.all_objects}, [], set()
+    layer = scene.view_layers[0]
     shown: set[str] = set()
+    hidden: set[str] = set()
     excluded: list[bpy.types.Collection] = []
-    stack = [scene.view_layers[0].layer_collection]  # its collection is the scene's own
+    stack = [(layer.layer_collection, False)]  # its collection is the scene's own
     while stack:
-        lc = stack.pop()
+        lc, unseen = stack.pop()
         if lc.exclude:
             excluded.append(lc.collection)
             continue
-        shown.update(ob.name for ob in lc.collection.objects)
-        stack.extend(lc.children)
-    return shown, excluded
+        unseen = unseen or lc.hide_viewport or lc.collection.hide_viewport
+        for ob in lc.collection.objects:
+            shown.add(ob.name)
+            if unseen or ob.hide_viewport or _hidden_in(ob, layer):
+                hidden.add(ob.name)
+        stack.extend((child, unseen) for child in lc.children)
+    return shown, excluded, hidden
+
+
+def _hidden_in(ob: bpy.types.Object, layer) -> bool:
+    """Whether ``ob`` is hidden (H) in the view layer ``layer``."""
+    try:
+        return bool(ob.hide_get(view_layer=layer))
+    except (RuntimeError, TypeError):
+        return False
 
 
 def _warn_placement(ob: bpy.types.Object, warnings: list[str]) -> None:

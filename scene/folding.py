@@ -20,7 +20,7 @@ from ..core.mesh.fold_mesh import FoldMesh
 from ..core.mesh.transfer import carried_shape
 from ..core.pattern.model import PatternError
 from . import bake, jobs, mesh_object, pins, self_intersection, source_state
-from .curves import curve_objects
+from .curves import curve_objects, shown_crease_curves
 from .fold_settings import (
     engine_id,
     override_angle_degrees,
@@ -85,10 +85,13 @@ def pattern_from_objects(objects, *, interval: float = 0.0, tolerance: float = 0
     return run_to_end(pattern_steps(objects, interval=interval, tolerance=tolerance))
 
 
-def pattern_steps(objects, *, interval: float = 0.0, tolerance: float = 0.0) -> Generator[str, None, Any]:
+def pattern_steps(
+    objects, *, interval: float = 0.0, tolerance: float = 0.0, notes: list[str] | None = None
+) -> Generator[str, None, Any]:
     """:func:`pattern_from_objects` in units for a job: reading the curves from the scene (units of
     ``curves.READ_UNIT_MS``), then each step of the discretisation (``core.pattern.discretize.discretize_steps``);
-    yields the unit's name, returns the pattern."""
+    yields the unit's name, returns the pattern. ``notes``: warnings about the choice of curves (hidden ones left
+    out), put first."""
     from ..core.pattern.discretize import discretize_steps
     from .curves import curves_steps, stored_pattern
 
@@ -97,8 +100,9 @@ def pattern_steps(objects, *, interval: float = 0.0, tolerance: float = 0.0) -> 
     # an unedited FOLD import: its own pattern, as the command line folds it
     stored = stored_pattern(objects, interval=interval or None, tolerance=tolerance or None)
     if stored is not None:
+        stored.warnings = [*(notes or []), *stored.warnings]
         return stored
-    notes: list[str] = []  # spline-level warnings (a one-point spline, modifiers not folded, ...)
+    notes = list(notes or [])  # and spline-level warnings (a one-point spline, modifiers not folded, ...)
     curves = yield from as_units(curves_steps(objects, warnings=notes), "reading curves")
     yield "curves read"
     pattern = yield from discretize_steps(curves, interval=interval or None, tolerance=tolerance or None)
@@ -194,8 +198,13 @@ def source_objects(ob: bpy.types.Object) -> list[bpy.types.Object]:
     """The crease curves a fold object was built from: its source collection's curves, or its source list."""
     props = ob.curved_fold_mesh
     if props.source_collection is not None:
-        return curve_objects(props.source_collection.all_objects)
+        return shown_crease_curves(props.source_collection)[0]
     return curve_objects([s.object for s in props.sources if s.object is not None])
+
+
+def hidden_sources_notes(coll: bpy.types.Collection | None) -> list[str]:
+    """The warning naming the crease curves of ``coll`` the viewport hides (left out of its fold), if any."""
+    return shown_crease_curves(coll)[1] if coll is not None else []
 
 
 def store_outcome(ob: bpy.types.Object, out: FoldOutcome, *, scene=None) -> None:
@@ -396,9 +405,11 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
         name, collection=target, scene=scene, place=lambda tmp: mesh_object.place_beside(tmp, sources)
     )
 
+    notes = hidden_sources_notes(coll)
+
     def steps():
         mesh, warnings = yield from _mesh_steps(
-            pattern_steps(sources, **pattern_parameters(options, scene)),
+            pattern_steps(sources, **pattern_parameters(options, scene), notes=notes),
             override_angle_degrees(options),
             options.mesh_type,
         )
@@ -515,6 +526,7 @@ def refold_job(
     fresh_settings = solver_settings(props)  # a fold from the flat sheet gets the whole budget, live or not
     mesh_type = props.mesh_type
     parameters = pattern_parameters(props, scene)
+    hidden_notes = hidden_sources_notes(props.source_collection)
     positions_preview = jobs.PositionsPreview(ob, scene)
     mesh_preview = jobs.MeshPreview(name, ob=ob, scene=scene)
     previews = _Previews(positions_preview)
@@ -522,7 +534,11 @@ def refold_job(
     def steps():
         mesh, warnings, remesh = stored, list(stored.warnings), False
         if rebuild:
-            built, warnings = yield from _mesh_steps(pattern_steps(sources, **parameters), angle, mesh_type)
+            built, warnings = yield from _mesh_steps(
+                pattern_steps(sources, **parameters, notes=hidden_notes),
+                angle,
+                mesh_type,
+            )
             if not same_mesh(built, stored):
                 mesh, remesh = built, True
                 mesh_preview.set_mesh(mesh)

@@ -627,3 +627,49 @@ def test_deleting_a_folded_mesh_deletes_its_crease_curves(extension, clean_scene
     bpy.app.timers.unregister(orphans._removal)
     assert not any(name in bpy.data.objects for name in creases)
     assert not orphans.orphaned_crease_curves()
+
+
+def test_hidden_crease_curves_are_left_out_of_a_collection_fold_through_every_door(extension, clean_scene, tmp_path):
+    """A pattern collection keeps an old crease hidden (H), one disabled in viewports and one in a sub-collection
+    excluded from the view layer (a designer session). A fold of the collection folded all three (303 faces against
+    151 for what the viewport shows), the command line folded the hidden and disabled ones; now every door folds
+    what the viewport shows, with a warning naming the curves left out."""
+    from .test_operators import make_curve
+
+    curves_mod = ext_module(extension, "scene.curves")
+    reader = ext_module(extension, "core.io.reader")
+    pipeline = ext_module(extension, "core.pipeline")
+    pattern = bpy.data.collections.new("Pattern")
+    clean_scene.collection.children.link(pattern)
+    old = bpy.data.collections.new("Old")
+    pattern.children.link(old)
+    corners = [(0, 0), (150, 0), (150, 150), (0, 150)]
+    border = [np.array([corners[i], corners[i], corners[(i + 1) % 4], corners[(i + 1) % 4]], float) for i in range(4)]
+    make_curve("Border", border, "BORDER", closed=True, collection=pattern)
+
+    def crease(name, pts, role, collection):
+        return make_curve(name, [np.array(pts, float)], role, 108.0, collection=collection)
+
+    crease("Valley", [[0, 50], [50, 90], [100, 90], [150, 60]], "VALLEY", pattern)
+    hidden = crease("Hidden", [[0, 100], [50, 130], [100, 130], [150, 110]], "MOUNTAIN", pattern)
+    disabled = crease("Disabled", [[50, 0], [60, 50], [60, 100], [50, 150]], "MOUNTAIN", pattern)
+    crease("Excluded", [[100, 0], [110, 50], [110, 100], [100, 150]], "MOUNTAIN", old)
+    bpy.context.view_layer.update()
+    hidden.hide_set(True)
+    disabled.hide_viewport = True
+    bpy.context.view_layer.layer_collection.children["Pattern"].children["Old"].exclude = True
+    bpy.context.view_layer.update()
+    kept, notes = curves_mod.shown_crease_curves(pattern)
+    assert sorted(ob.name for ob in kept) == ["Border", "Valley"]
+    assert len(notes) == 1 and notes[0].startswith("3 hidden crease curve(s) of 'Pattern' left out: ")
+    assert all(f"'{name}'" in notes[0] for name in ("Hidden", "Disabled", "Excluded"))
+    assert bpy.ops.curved_fold.fold(collection="Pattern") == {"FINISHED"}
+    faces = bpy.context.active_object.curved_fold_mesh.last_faces
+    path = tmp_path / "hidden.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path), copy=True)
+    for collection in (None, "Pattern"):
+        pattern_read = reader.read_pattern(path, collection=collection)
+        assert pipeline.fold_pattern(pattern_read).report["faces"] == faces, collection
+        assert any("hidden crease curve(s)" in w for w in pattern_read.warnings), collection
+    visible_only = reader.read_pattern(path, collection="Pattern")
+    assert visible_only.count("M") == 0 and visible_only.count("V") > 0

@@ -84,16 +84,15 @@ def shown_crease_curves(collection: bpy.types.Collection, layer=None) -> tuple[l
     every = curve_objects(collection.all_objects)
     hidden = _hidden_below(collection, layer)
     kept = [ob for ob in every if ob.name not in hidden]
-    left = [ob.name for ob in every if ob.name in hidden]
-    notes = []
-    if left:
-        notes.append(
-            f"{len(left)} hidden crease curve(s) of '{collection.name}' left out: "
-            + ", ".join(f"'{n}'" for n in left[:10])
-            + (", ..." if len(left) > 10 else "")
-            + " (show them to fold them)"
-        )
-    return kept, notes
+    return kept, _hidden_note([ob.name for ob in every if ob.name in hidden], f"'{collection.name}'")
+
+
+def _hidden_note(names: list[str], where: str) -> list[str]:
+    """The warning naming the hidden crease curves ``names`` of ``where`` left out of a fold (none if none)."""
+    if not names:
+        return []
+    listed = ", ".join(f"'{n}'" for n in names[:10]) + (", ..." if len(names) > 10 else "")
+    return [f"{len(names)} hidden crease curve(s) of {where} left out: {listed} (show them to fold them)"]
 
 
 def _hidden_below(collection: bpy.types.Collection, layer) -> set[str]:
@@ -481,25 +480,13 @@ def _blend_objects(path: Path, data, scene, collection: str | None, warnings: li
         hidden = _hidden_below(chosen, layer)
         kept = [ob for ob in curves if ob.name in members and ob.name not in hidden]
         unseen = [ob.name for ob in curves if ob.name in members and ob.name in hidden]
-        if unseen:
-            warnings.append(
-                f"{len(unseen)} hidden crease curve(s) of '{collection}' left out: "
-                + ", ".join(f"'{n}'" for n in unseen[:10])
-                + (", ..." if len(unseen) > 10 else "")
-                + " (show them to fold them)"
-            )
+        warnings += _hidden_note(unseen, f"'{collection}'")
     elif scene is not None:
         visible, excluded, hidden = _shown_in(scene)
         kept = [ob for ob in curves if ob.name in visible and ob.name not in hidden]
         left = [ob.name for ob in curves if ob.name not in visible]
         unseen = [ob.name for ob in curves if ob.name in visible and ob.name in hidden]
-        if unseen:
-            warnings.append(
-                f"{len(unseen)} hidden crease curve(s) of scene '{scene.name}' left out: "
-                + ", ".join(f"'{n}'" for n in unseen[:10])
-                + (", ..." if len(unseen) > 10 else "")
-                + " (show them to fold them)"
-            )
+        warnings += _hidden_note(unseen, f"scene '{scene.name}'")
         if left:
             where = (
                 f" (in {', '.join(repr(c.name) for c in excluded)}, excluded from the view layer)" if excluded else ""

@@ -23,6 +23,7 @@ FORMATS = (
     ("BLEND", "Blender (.blend)", "The folded object with its baked shape keys", ".blend"),
 )
 _EXT = {f[0]: f[3] for f in FORMATS}
+_FORMAT_OF = {f[3]: f[0] for f in FORMATS}
 
 
 def folded_frames(ob: bpy.types.Object) -> tuple[list[int], list[np.ndarray]]:
@@ -98,7 +99,21 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
     def poll(cls, context):
         return _common.poll_fold_object(cls, context, object_mode=False)
 
+    shown_format: StringProperty(options={"HIDDEN", "SKIP_SAVE"})
+    """The format :meth:`check` last saw, to tell a change of the Format menu from a typed file extension."""
+
     def check(self, context):
+        """Keep the file name and the format together: a typed extension of another format chooses that format
+        (``m1.stl`` writes STL, as the name says; it wrote ``m1.glb``), a change of the Format menu renames."""
+        typed = _FORMAT_OF.get(Path(self.filepath).suffix.lower())
+        switched = typed is not None and typed != self.file_format and self.shown_format in ("", self.file_format)
+        if switched:
+            self.file_format = typed
+        self.shown_format = self.file_format
+        return self._with_suffix() or switched
+
+    def _with_suffix(self) -> bool:
+        """Give the file name the format's extension; whether it changed."""
         path = Path(self.filepath)
         want = _EXT[self.file_format]
         if path.suffix.lower() != want and path.name:
@@ -108,7 +123,10 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
 
     def execute(self, context):
         ob = context.active_object
-        self.check(context)
+        typed = _FORMAT_OF.get(Path(self.filepath).suffix.lower())
+        if typed is not None and not self.properties.is_property_set("file_format"):
+            self.file_format = typed  # a script's filepath="m1.stl" writes STL; a format given wins
+        self._with_suffix()
         try:
             mesh = mesh_object.read_fold_mesh(ob)
             frames, positions = folded_frames(ob)
@@ -177,6 +195,8 @@ class CURVED_FOLD_OT_export_pattern_svg(bpy.types.Operator, ExportHelper):
 
     def execute(self, context):
         ob = context.active_object
+        if Path(self.filepath).suffix.lower() != ".svg":  # a script's filepath without it (the browser adds it)
+            self.filepath += ".svg"
         try:
             layout = "cutter" if self.layout == "CUTTER" else "origami-simulator"
             path = export.write_pattern_svg(self.filepath, mesh_object.read_fold_mesh(ob), layout=layout)

@@ -354,6 +354,35 @@ def test_export_operators_write_files_blender_reimports(folded, tmp_path):
     assert all(len(fr["edges_foldAngle"]) == len(doc["edges_vertices"]) for fr in doc["file_frames"])
 
 
+def test_export_takes_the_format_from_the_file_name_typed(folded, extension, tmp_path):
+    """``export_folded(filepath="m1.stl")`` with no format wrote ``m1.glb`` (the default format renamed the file), and
+    ``export_pattern_svg(filepath="cp")`` wrote a file without an extension (a designer session's script). A name's
+    extension now chooses the format, a format given still wins, and the SVG gets its extension. In the file
+    browser a typed extension switches the Format menu and a change of the menu renames the file (``check``)."""
+    for suffix in (".stl", ".obj", ".fold", ".glb"):
+        assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / f"m1{suffix}")) == {"FINISHED"}
+        assert (tmp_path / f"m1{suffix}").is_file(), suffix
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m1.fold", "m1.glb", "m1.obj", "m1.stl"]
+    assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "m2.stl"), file_format="OBJ") == {"FINISHED"}
+    assert (tmp_path / "m2.obj").is_file() and not (tmp_path / "m2.stl").exists()
+    assert bpy.ops.curved_fold.export_pattern_svg(filepath=str(tmp_path / "cp")) == {"FINISHED"}
+    assert (tmp_path / "cp.svg").is_file() and not (tmp_path / "cp").exists()
+
+    op = importlib.import_module(extension.__name__ + ".operators.export").CURVED_FOLD_OT_export_folded
+
+    class Browser:  # the operator's check() as the file browser calls it, on a stand-in for its properties
+        filepath, file_format, shown_format = "untitled.glb", "GLB", ""
+        _with_suffix = op._with_suffix
+
+    b = Browser()
+    assert not op.check(b, None)
+    b.filepath = "m1.stl"  # typed: the menu follows
+    assert op.check(b, None) and (b.file_format, b.filepath) == ("STL", "m1.stl")
+    b.file_format = "OBJ"  # the menu changed: the name follows
+    assert op.check(b, None) and (b.file_format, b.filepath) == ("OBJ", "m1.obj")
+    assert not op.check(b, None)
+
+
 def test_export_of_an_out_of_date_bake_says_so(folded, extension, tmp_path, capfd):
     """A bake left behind by a later fold (live re-fold, marked out of date: its keys muted) was exported without a
     word, though the file then differs from the viewport."""

@@ -312,13 +312,28 @@ def on_load(*_args) -> None:
     _caches.clear()
 
 
+@persistent
+def on_undo(*_args) -> None:
+    """Undo or redo is about to restore an earlier state: running jobs stop first (their previews restored), as Esc
+    stops them. A Re-fold running through Ctrl+Z ended with "the scene changed while it ran (ReferenceError: StructRNA
+    of type Scene has been removed)" (a designer session); the undo then takes the scene back as it does."""
+    jobs.cancel_all()
+
+
+UNDO_HANDLERS = ("undo_pre", "redo_pre")
+
+
 def register_extra() -> None:
     app_handlers.attach(bpy.app.handlers.frame_change_post, on_frame_change)
     app_handlers.attach(bpy.app.handlers.load_pre, on_load)
+    for name in UNDO_HANDLERS:
+        app_handlers.attach(getattr(bpy.app.handlers, name), on_undo)
 
 
 def unregister_extra() -> None:
     app_handlers.detach(bpy.app.handlers.frame_change_post, on_frame_change)
     app_handlers.detach(bpy.app.handlers.load_pre, on_load)
+    for name in UNDO_HANDLERS:
+        app_handlers.detach(getattr(bpy.app.handlers, name), on_undo)
     jobs.cancel_all()
     _caches.clear()

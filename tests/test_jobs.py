@@ -527,3 +527,21 @@ def test_an_import_runs_in_slices_and_esc_leaves_the_scene_as_it_was(extension, 
     assert state == {"FINISHED"}  # the first file imported, the second reported
     assert [k for k, _ in reports].count("ERROR") == 1 and "Import failed" in reports[-1][1]
     assert len(bpy.context.selected_objects) == len(objects)
+
+
+def test_undo_stops_running_jobs_first(folded, extension):
+    """Ctrl+Z during a Re-fold or a Bake ended the job with "the scene changed while it ran (ReferenceError: StructRNA
+    of type Scene has been removed)" (a designer session). Undo and redo now stop every running job first, as Esc
+    does (its preview restored, the scene as it was), then take the scene back."""
+    ob, _, _ = folded
+    jobs = mod(extension, "scene.jobs")
+    folding = mod(extension, "scene.folding")
+    ob.curved_fold_mesh.fold_percent = 40.0
+    before = exact_state()
+    job = jobs.start(folding.refold_job(ob, rebuild=False))
+    run_slices_until(jobs, job, "solve")
+    for name in ("undo_pre", "redo_pre"):
+        assert any(getattr(h, "__name__", "") == "on_undo" for h in getattr(bpy.app.handlers, name)), name
+    handler = next(h for h in bpy.app.handlers.undo_pre if getattr(h, "__name__", "") == "on_undo")
+    handler(bpy.context.scene)
+    assert job.state == "cancelled" and exact_state() == before

@@ -430,26 +430,33 @@ def write_pattern_svg(
     by_role: dict[str, list[str]] = {a: [] for a in SVG_STROKES}
     from ..core.pattern.polylines import chain_edges
 
+    angle_key = np.round(np.nan_to_num(angles, nan=999.0), 6)
     for a in SVG_STROKES:
         lines = by_role[a]
         if cutter:
             width = cut_width if a in CUT_ROLES else score_width
-        for poly in np.unique(mesh.edge_polyline[drawn & (assignments == a)]):
-            sel = drawn & (assignments == a) & (mesh.edge_polyline == poly)
-            for angle in np.unique(np.round(np.nan_to_num(angles[sel], nan=999.0), 6)):
-                group = sel & (np.round(np.nan_to_num(angles, nan=999.0), 6) == angle)
-                opacity = 1.0 if a in "FBC" or angle == 999.0 else min(abs(float(angle)) / 180.0, 1.0)
-                for chain in chain_edges(edges[group]):
-                    pts = v[chain] - lo
-                    pts[:, 1] = h - pts[:, 1]
-                    coords = " ".join(f"{_svg_number(x)},{_svg_number(y)}" for x, y in pts.tolist())
-                    attrs = f'stroke="{SVG_STROKES[a]}" fill="none" stroke-width="{width:.4g}"'
-                    if opacity != 1.0 and not cutter:
-                        attrs += f' opacity="{_svg_number(opacity)}"'
-                    src = mesh.sources[poly] if 0 <= poly < len(mesh.sources) else ""
-                    data = f" data-source={quoteattr(src)}" if src else ""
-                    data += f' {SAMPLED_ATTRIBUTE}="{SAMPLED_VALUE}"'  # our vertices: read back as written
-                    lines.append(f'<polyline {attrs}{data} points="{coords}"/>')
+        # the role's edges grouped by source stroke and angle, in that order, each group in edge order (one sort:
+        # masks over every edge per stroke took ~0.2 s on a 3,200-stroke pattern)
+        idx = np.flatnonzero(drawn & (assignments == a))
+        if len(idx) == 0:
+            continue
+        idx = idx[np.lexsort((angle_key[idx], mesh.edge_polyline[idx]))]
+        poly_of, angle_of = mesh.edge_polyline[idx], angle_key[idx]
+        starts = np.flatnonzero(np.r_[True, (poly_of[1:] != poly_of[:-1]) | (angle_of[1:] != angle_of[:-1])])
+        for group in np.split(idx, starts[1:]):
+            poly, angle = int(mesh.edge_polyline[group[0]]), float(angle_key[group[0]])
+            opacity = 1.0 if a in "FBC" or angle == 999.0 else min(abs(angle) / 180.0, 1.0)
+            for chain in chain_edges(edges[group]):
+                pts = v[chain] - lo
+                pts[:, 1] = h - pts[:, 1]
+                coords = " ".join(f"{_svg_number(x)},{_svg_number(y)}" for x, y in pts.tolist())
+                attrs = f'stroke="{SVG_STROKES[a]}" fill="none" stroke-width="{width:.4g}"'
+                if opacity != 1.0 and not cutter:
+                    attrs += f' opacity="{_svg_number(opacity)}"'
+                src = mesh.sources[poly] if 0 <= poly < len(mesh.sources) else ""
+                data = f" data-source={quoteattr(src)}" if src else ""
+                data += f' {SAMPLED_ATTRIBUTE}="{SAMPLED_VALUE}"'  # our vertices: read back as written
+                lines.append(f'<polyline {attrs}{data} points="{coords}"/>')
     if cutter:
         body = []
         for layer, roles in (("cut", CUT_ROLES), ("score", SCORE_ROLES)):

@@ -219,6 +219,11 @@ def test_errors_and_warnings_name_the_curve(mod, clean_scene):
     bpy.context.view_layer.update()
     with pytest.raises(mod.PatternError, match="curve 'Tilted' spline 0 is not flat"):
         mod.curves_from_objects([valley, tilted])
+    noisy = bezier_object("Noisy", MOUNTAIN, role="MOUNTAIN")  # 20 µm of z noise on a ~100 mm pattern: read
+    noisy.data.splines[0].bezier_points[0].co.z += 0.02
+    noisy.location.z = -0.015
+    bpy.context.view_layer.update()
+    assert len(mod.curves_from_objects([valley, noisy])) == 2
     raised = bezier_object("Raised", MOUNTAIN, role="MOUNTAIN")
     raised.location.z = 5.0
     bpy.context.view_layer.update()

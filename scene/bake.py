@@ -22,7 +22,7 @@ from dataclasses import field as dc_field
 import bpy
 import numpy as np
 
-from .mesh_object import _crease_curve_objects, crease_point_indices, flat_rescale, mm_per_unit
+from .mesh_object import _crease_curve_objects, crease_point_indices, flat_rescale, local_offset, mm_per_unit
 
 KEY_PREFIX = "cf_frame_"
 
@@ -153,12 +153,13 @@ def bake_shape_keys(
     me = ob.data
     n = len(me.vertices)
     scale = 1.0 / mm_per_unit(scene)
+    offset = local_offset(ob)  # the engine's frame → object space, however the origin was moved
     shapes = []
     for i, p in enumerate(positions):
         p = np.asarray(p, dtype=np.float64)
         if p.shape != (n, 3) or not np.all(np.isfinite(p)):
             raise ValueError(f"frame {frames[i]}: positions must be finite with shape ({n}, 3), got {p.shape}")
-        shapes.append((p * scale).astype(np.float32))
+        shapes.append((p * scale + offset).astype(np.float32))
     if basis is None:
         flat = me.attributes.get("cf_flat")
         base = np.zeros((n, 3), dtype=np.float32)
@@ -166,10 +167,11 @@ def bake_shape_keys(
             xy = np.empty(2 * n, dtype=np.float32)
             flat.data.foreach_get("vector", xy)
             base[:, :2] = xy.reshape(-1, 2) * (scale * flat_rescale(me, scene))
+            base += offset.astype(np.float32)
         else:
             me.attributes["position"].data.foreach_get("vector", base.ravel())
     else:
-        base = (np.asarray(basis, dtype=np.float64).reshape(n, 3) * scale).astype(np.float32)
+        base = (np.asarray(basis, dtype=np.float64).reshape(n, 3) * scale + offset).astype(np.float32)
 
     clear_bake(ob)
 

@@ -460,10 +460,9 @@ def create_fold(out: FoldOutcome, sources, coll_name, options: FoldOptions, targ
 
 
 def current_positions(ob: bpy.types.Object, scene=None) -> np.ndarray:
-    """The fold object's vertex positions (mm) as stored (the ``position`` attribute, i.e. the Basis)."""
-    co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
-    ob.data.attributes["position"].data.foreach_get("vector", co)
-    return co.reshape(-1, 3).astype(np.float64) * mesh_object.mm_per_unit(scene)
+    """The fold object's vertex positions (mm, the engine's frame) as stored (the ``position`` attribute, i.e. the
+    Basis), less any move of its origin (``mesh_object.engine_positions``)."""
+    return mesh_object.engine_positions(ob, scene)
 
 
 def same_mesh(a: FoldMesh, b: FoldMesh) -> bool:

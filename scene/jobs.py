@@ -137,6 +137,10 @@ class PositionsPreview:
                 sp.points.foreach_get("co", co)
                 pts.append(co)
             self.children[name] = pts
+        self.frame = {  # copies: an ID property array read from the object is a view of it
+            key: None if ob.get(key) is None else [float(x) for x in ob.get(key)]
+            for key in (mesh_object.OFFSET_KEY, mesh_object.PROBE_KEY)
+        }
         self.shown = False
 
     @property
@@ -171,6 +175,11 @@ class PositionsPreview:
             for sp, co in zip(child.data.splines, self.children.get(name, ()), strict=False):
                 sp.points.foreach_set("co", co)
             child.data.update_tag()
+        for key, value in self.frame.items():  # the origin offset and probe as they were (the previews wrote them)
+            if value is None:
+                ob.pop(key, None)
+            else:
+                ob[key] = value
         self.shown = False
 
 
@@ -198,13 +207,16 @@ class MeshPreview:
         self.me_name: str | None = None
         self.tmp: ObjectHandle | None = None
         self.old_me_name: str | None = None
+        self.offset = np.zeros(3)  # BU: the object's origin offset (mesh_object.local_offset), for a rebuild
 
     def set_mesh(self, mesh) -> None:
         """The FoldMesh the following :meth:`show` calls move (made once the pattern is meshed)."""
         self.mesh = mesh
 
     def _make(self, positions_mm: np.ndarray) -> None:
-        me = mesh_object._new_mesh_data(self.mesh, positions_mm, f"{self.name} (folding)", self.scene)
+        if self.handle is not None:  # a rebuild: shown where the object's origin puts its vertices
+            self.offset = mesh_object.local_offset(self.handle.require())
+        me = mesh_object._new_mesh_data(self.mesh, positions_mm, f"{self.name} (folding)", self.scene, self.offset)
         self.me_name = me.name
         if self.handle is not None:
             ob = self.handle.require()
@@ -228,8 +240,8 @@ class MeshPreview:
         me = bpy.data.meshes.get(self.me_name)
         if me is None:
             return
-        co = (np.asarray(positions_mm, dtype=np.float64) / mesh_object.mm_per_unit(self.scene)).astype(np.float32)
-        me.attributes["position"].data.foreach_set("vector", co.ravel())
+        co = np.asarray(positions_mm, dtype=np.float64) / mesh_object.mm_per_unit(self.scene) + self.offset
+        me.attributes["position"].data.foreach_set("vector", co.astype(np.float32).ravel())
         me.update()
 
     def restore(self) -> None:

@@ -302,11 +302,15 @@ def create_fold_object(
     return ob
 
 
-def _new_mesh_data(mesh: FoldMesh, positions: np.ndarray, name: str, scene) -> bpy.types.Mesh:
-    """A new Mesh datablock with ``mesh``'s triangles at ``positions`` (mm); removed again if it cannot be made."""
+def _new_mesh_data(
+    mesh: FoldMesh, positions: np.ndarray, name: str, scene, offset: np.ndarray | None = None
+) -> bpy.types.Mesh:
+    """A new Mesh datablock with ``mesh``'s triangles at ``positions`` (mm), moved by ``offset`` (BU, the object's
+    :func:`local_offset`); removed again if it cannot be made."""
     me = bpy.data.meshes.new(name)
+    local = positions / mm_per_unit(scene) + (0.0 if offset is None else offset)
     try:
-        me.from_pydata((positions / mm_per_unit(scene)).tolist(), [], mesh.triangles.tolist())
+        me.from_pydata(local.tolist(), [], mesh.triangles.tolist())
         me.update()
         if len(me.edges) != len(mesh.edges):
             raise ValueError(
@@ -332,16 +336,19 @@ def replace_fold_mesh(
     new mesh fails, ``ob`` keeps its old mesh."""
     positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
     old = ob.data
-    me = _new_mesh_data(mesh, positions, old.name, scene)
+    offset = local_offset(ob)  # the origin as the designer left it, measured on the old mesh
+    me = _new_mesh_data(mesh, positions, old.name, scene, offset)
     for mat in old.materials:
         me.materials.append(mat)
     ob.data = me
+    remember_local(ob)
     try:
         write_pattern_attributes(ob, mesh, scene)
         ob.pop("cf_crease_topology", None)
         write_results(ob, mesh, positions, scene=scene, **results)
     except Exception:
         ob.data = old
+        remember_local(ob)
         bpy.data.meshes.remove(me)
         raise
     name = old.name
@@ -404,6 +411,60 @@ def _blender_face_order(me: bpy.types.Mesh, mesh: FoldMesh) -> np.ndarray:
     return np.arange(mesh.n_faces)
 
 
+OFFSET_KEY, PROBE_KEY = "cf_local_offset", "cf_local_probe"
+"""A fold object's vertices sit at the engine's positions (mm, the pattern's frame) ÷ the unit, plus ``cf_local_offset``
+(Blender units): zero until the designer moves the object's origin (Set Origin, or Snap ▸ Cursor to Selected and
+Origin to 3D Cursor), which shifts every vertex the other way. ``cf_local_probe`` is the mean of the vertices as
+last written; a later write or read finds the shift from it (:func:`local_offset`). Re-folding an object whose
+origin had been set to its geometry moved the mesh away by the shift (83 mm on the single-curve example)."""
+
+SHIFT_FRACTION = 1e-4
+"""A move of the vertices' mean by more than this fraction of the mesh's size since the last write is an origin
+shift (an edit of one vertex of a 1,600-vertex mesh moves it by ~1e-6 of the size)."""
+
+
+def local_coordinates(ob: bpy.types.Object) -> np.ndarray:
+    """``ob``'s vertices as stored (the ``position`` attribute), ``(n, 3)`` Blender units, float64."""
+    co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
+    ob.data.attributes["position"].data.foreach_get("vector", co)
+    return co.reshape(-1, 3).astype(np.float64)
+
+
+def local_offset(ob: bpy.types.Object) -> np.ndarray:
+    """The offset (BU) of ``ob``'s vertices from the engine's positions ÷ unit, brought up to date with any move of
+    its origin since the last write (:data:`OFFSET_KEY`): the shift of the vertices' mean from the probe is added,
+    and the crease-curve children are given their parent's frame again (Set Origin keeps children in place by
+    moving them the other way)."""
+    offset = np.array(ob.get(OFFSET_KEY, (0.0, 0.0, 0.0)), dtype=np.float64)
+    probe = ob.get(PROBE_KEY)
+    if probe is None or len(ob.data.vertices) == 0:
+        return offset
+    co = local_coordinates(ob)
+    shift = co.mean(axis=0) - np.array(probe, dtype=np.float64)
+    size = float(np.ptp(co, axis=0).max()) or 1.0
+    if np.abs(shift).max() > SHIFT_FRACTION * size:
+        offset = offset + shift
+        ob[OFFSET_KEY] = offset.tolist()
+        ob[PROBE_KEY] = co.mean(axis=0).tolist()
+        for child in _crease_curve_objects(ob).values():  # Set Origin moved them to stay in place
+            child.matrix_parent_inverse.identity()
+            child.matrix_basis.identity()
+    return offset
+
+
+def remember_local(ob: bpy.types.Object, co: np.ndarray | None = None) -> None:
+    """Record the mean of ``ob``'s vertices as just written (``co``, BU; read if not given): :data:`PROBE_KEY`."""
+    co = local_coordinates(ob) if co is None else np.asarray(co, dtype=np.float32).astype(np.float64)
+    if len(co):
+        ob[PROBE_KEY] = co.mean(axis=0).tolist()
+
+
+def engine_positions(ob: bpy.types.Object, scene: bpy.types.Scene | None = None) -> np.ndarray:
+    """``ob``'s vertex positions in the engine's frame (``(n, 3)`` mm): as stored, less the origin offset."""
+    offset = local_offset(ob)
+    return (local_coordinates(ob) - offset) * mm_per_unit(scene)
+
+
 def update_positions(ob: bpy.types.Object, positions: np.ndarray, *, scene: bpy.types.Scene | None = None) -> None:
     """Move ``ob``'s vertices to ``positions`` (``(n, 3)`` mm); writes the Basis key when the mesh has shape keys.
 
@@ -411,7 +472,8 @@ def update_positions(ob: bpy.types.Object, positions: np.ndarray, *, scene: bpy.
     children follow.
     """
     me = ob.data
-    co = (np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene)).astype(np.float32)
+    offset = local_offset(ob)
+    co = (np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene) + offset).astype(np.float32)
     if len(co) != len(me.vertices):
         raise ValueError(f"object '{ob.name}' has {len(me.vertices)} vertices, got {len(co)} positions")
     if me.shape_keys is not None:
@@ -428,6 +490,7 @@ def update_positions(ob: bpy.types.Object, positions: np.ndarray, *, scene: bpy.
             sp.points.foreach_set("co", pts[offset : offset + k].ravel())
             offset += k
         child.data.update_tag()
+    remember_local(ob, co)
 
 
 def write_results(
@@ -462,7 +525,7 @@ def write_results(
         write_colours(me, "cf_warp", w, WARP_CLIP_DEG)
     if me.color_attributes.get("cf_strain") is not None and me.color_attributes.active_color is None:
         me.color_attributes.active_color = me.color_attributes["cf_strain"]
-    co = np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene)
+    co = np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene) + local_offset(ob)
     if ob.get("cf_no_creases"):
         return
     if not _crease_curve_objects(ob) or ob.get("cf_crease_topology") != _topology_key(mesh):

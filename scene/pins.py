@@ -65,10 +65,9 @@ def pin_hooks(ob: bpy.types.Object) -> dict[int, bpy.types.Object]:
 
 
 def current_positions(ob: bpy.types.Object, scene: bpy.types.Scene | None = None) -> np.ndarray:
-    """The fold object's vertex positions as shown (``(n, 3)`` mm, object space)."""
-    co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
-    ob.data.attributes["position"].data.foreach_get("vector", co)
-    return co.reshape(-1, 3).astype(np.float64) * mesh_object.mm_per_unit(scene)
+    """The fold object's vertex positions as shown (``(n, 3)`` mm, the engine's frame: object space less any move
+    of its origin, ``mesh_object.engine_positions``)."""
+    return mesh_object.engine_positions(ob, scene)
 
 
 def _along(flat: np.ndarray, idx: np.ndarray) -> np.ndarray:
@@ -91,9 +90,10 @@ def constraints_from_object(
     if hooks:
         to_local = ob.matrix_world.inverted()
         mm = mesh_object.mm_per_unit(scene)
+        offset = mesh_object.local_offset(ob)  # object space less any move of its origin: the engine's frame
         for row, k in enumerate(pins.tolist()):
             if k in hooks:
-                targets[row] = np.array(to_local @ hooks[k].matrix_world.translation) * mm
+                targets[row] = (np.array(to_local @ hooks[k].matrix_world.translation) - offset) * mm
     a, b = (group_vertices(ob, name) for name in GLUE_GROUPS)
     if len(a) != len(b):
         raise PatternError(
@@ -123,7 +123,7 @@ def add_pin_hooks(ob: bpy.types.Object, scene: bpy.types.Scene | None = None) ->
     if len(vertices) == 0:
         raise PatternError(f"'{ob.name}' has no '{PIN_GROUP}' vertex group with vertices: assign the vertices to pin")
     have = pin_hooks(ob)
-    co = current_positions(ob, scene) / mesh_object.mm_per_unit(scene)
+    co = mesh_object.local_coordinates(ob)  # object space: the empties are its children
     size = 0.02 * float(np.max(np.ptp(co, axis=0))) or 0.01
     collection = ob.users_collection[0] if ob.users_collection else bpy.context.scene.collection
     made = []

@@ -718,3 +718,55 @@ def test_live_refolds_when_a_source_curve_fold_angle_changes(folded, extension):
     assert list(live._pending) == [ob.name]
     live._pending.clear()
     ob.curved_fold_mesh.live = False
+
+
+def test_a_moved_origin_stays_where_the_designer_put_it(folded, extension):
+    """A designer sets the folded mesh's origin to its geometry (to scale or turn it for printing) and re-folds: the
+    mesh jumped away by the shift of the origin (83 mm on the single-curve example), as the fold wrote the engine's
+    positions as they come. The shift is now kept (``cf_local_offset``) through re-folds, rebuilds, bakes, pins and
+    the crease curves."""
+    ob, _, _ = folded
+    mesh_object = importlib.import_module(extension.__name__ + ".scene.mesh_object")
+    bake = importlib.import_module(extension.__name__ + ".scene.bake")
+
+    def world(o, co=None):
+        bpy.context.view_layer.update()
+        m = np.array(o.matrix_world)
+        co = np.array([v.co for v in o.data.vertices]) if co is None else co
+        return co @ m[:3, :3].T + m[:3, 3]
+
+    def crease_points_world():
+        out = []
+        for child in mesh_object._crease_curve_objects(ob).values():
+            co = np.array([p.co[:3] for sp in child.data.splines for p in sp.points])
+            out.append((world(child, co), mesh_object.crease_point_indices(child)))
+        return out
+
+    before = world(ob)
+    select_only([ob])
+    assert bpy.ops.object.origin_set(type="ORIGIN_GEOMETRY") == {"FINISHED"}
+    shift = np.array(ob.location)
+    assert np.abs(world(ob) - before).max() < 1e-6
+    for rebuild in ("RESOLVE", "REBUILD"):
+        assert bpy.ops.curved_fold.refold(rebuild=rebuild) == {"FINISHED"}, rebuild
+        assert np.abs(world(ob) - before).max() < 1e-6, rebuild
+        for points, idx in crease_points_world():
+            assert np.abs(points - world(ob)[idx]).max() < 1e-6, rebuild
+    assert np.abs(np.array(ob.location) - shift).max() == 0.0  # the origin stays where it was put
+    bpy.context.scene.frame_start, bpy.context.scene.frame_end = 1, 3
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    last = np.array([p.co for p in ob.data.shape_keys.key_blocks[bake.key_name(3)].data])
+    assert np.abs(world(ob, last) - before).max() < 1e-5  # the last baked frame is the fold, where it was
+    assert bpy.ops.curved_fold.clear_bake() == {"FINISHED"}
+    # pins: their hooks sit on their vertices, and a re-fold holds the vertices where they are
+    pinned = [0, len(ob.data.vertices) - 1]
+    ob.vertex_groups.new(name="cf_pins").add(pinned, 1.0, "REPLACE")
+    assert bpy.ops.curved_fold.add_pin_hooks() == {"FINISHED"}
+    hooks = importlib.import_module(extension.__name__ + ".scene.pins").pin_hooks(ob)
+    bpy.context.view_layer.update()
+    for k in pinned:
+        assert np.abs(np.array(hooks[k].matrix_world.translation) - world(ob)[k]).max() < 1e-6
+    held = world(ob)[pinned]
+    ob.curved_fold_mesh.fold_percent = 60.0
+    assert bpy.ops.curved_fold.refold(rebuild="RESOLVE") == {"FINISHED"}
+    assert np.abs(world(ob)[pinned] - held).max() < 1e-5

@@ -854,3 +854,22 @@ def test_hidden_elements_are_not_read_and_a_visible_child_shows_through() -> Non
     )
     assert [c.source for c in d.curves] == ["SVG <line id='shown'> (line 3)", "SVG <line id='back'> (line 5)"]
     assert d.warnings == []
+
+
+def test_current_color_strokes_take_the_color_in_effect() -> None:
+    """svgo and icon tools write ``stroke="currentColor"`` with the colour on a group (``<g color="#0000ff">``): the
+    valley was skipped as an unknown stroke colour (a designer session). It takes the ``color`` in effect, from an
+    attribute, a style or a CSS rule, inherited; black where none is set."""
+    svg = (
+        '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" viewBox="0 0 200 200" fill="none">'
+        "<style>.m { color: #ff0000 }</style>"
+        '<rect width="200" height="200" stroke="currentColor"/>'
+        '<g color="#0000ff"><path d="M150,0 C130,70 170,130 150,200" stroke="currentColor" stroke-opacity="0.5"/></g>'
+        '<g class="m"><path d="M50,0 L50,200" stroke="currentColor"/></g>'
+        '<path d="M100,0 L100,200" style="color: blue; stroke: currentcolor"/>'
+        "</svg>"
+    )
+    drawing = parse_svg_text(svg, "cc.svg")
+    got = sorted((c.assignment, round(c.fold_angle or 0.0, 6)) for c in drawing.curves)
+    assert got == [("B", 0.0), ("M", -180.0), ("V", 90.0), ("V", 180.0)]
+    assert not any("unknown stroke" in w for w in drawing.warnings)

@@ -132,7 +132,7 @@ SAMPLED_ATTRIBUTE, SAMPLED_VALUE = "data-curved-fold", "sampled"
 """How Curved Fold's SVG export marks its polylines (a curve's samples, a border's subdivision, as meshed): read
 back, their vertices are kept as written (:attr:`..pattern.model.CreaseCurve.sampled`), not thinned as a polyline
 drawn far finer than the interval is, so the file folds to the mesh it was written from."""
-INHERITED = ("stroke", "stroke-opacity", "fill", "display", "visibility")
+INHERITED = ("stroke", "stroke-opacity", "fill", "display", "visibility", "color")
 
 
 VISITS_PER_UNIT = 250
@@ -358,7 +358,7 @@ def _matches(rule: _Rule, elem: _Element) -> bool:
 def _own_style(elem: _Element, rules: list[_Rule]) -> dict[str, str]:
     """The element's own declared properties: attributes < matching CSS rules (by specificity, order) < ``style``."""
     props: dict[str, str] = {}
-    for key in ("stroke", "stroke-opacity", "fill", "opacity", "display", "visibility"):
+    for key in ("stroke", "stroke-opacity", "fill", "opacity", "display", "visibility", "color"):
         if key in elem.attrib:
             props[key] = elem.attrib[key].strip()
     for rule in sorted((r for r in rules if _matches(r, elem)), key=lambda r: (r.specificity, r.order)):
@@ -447,6 +447,16 @@ def _parse_colour(value: str) -> tuple[tuple[int, int, int], float] | None:
         return None
     r, g, b = (int(round(x)) for x in rgb)  # type: ignore[arg-type]
     return (r, g, b), min(max(alpha, 0.0), 1.0)
+
+
+def _current_colour(value: str | None, style: dict[str, str]) -> str | None:
+    """``value`` with CSS's ``currentColor`` replaced by the ``color`` property in effect (inherited; black where
+    none is set), as svgo and icon tools write strokes (``stroke="currentColor"`` in ``<g color="#0000ff">``: the
+    valley was skipped as an unknown colour, a designer session)."""
+    if value is not None and value.strip().lower() == "currentcolor":
+        colour = style.get("color", "black")
+        return "black" if colour.strip().lower() in ("currentcolor", "inherit") else colour
+    return value
 
 
 def stroke_role(value: str | None) -> tuple[str, float] | None:
@@ -1291,7 +1301,7 @@ class _Reader:
         style = place.style
         if _invisible(style):
             return
-        stroke = style.get("stroke")
+        stroke = _current_colour(style.get("stroke"), style)
         role = stroke_role(stroke)
         subpaths = _shape_subpaths(elem, where, self.segment_budget, place.box)
         ratio = _unit_scale(elem, place.matrix)
@@ -1305,7 +1315,7 @@ class _Reader:
         if not subpaths:
             return
         if _no_stroke(stroke):  # not drawn as a line, so not a crease (LibreOffice's bounding boxes)
-            if elem.tag != "line" and stroke_role(style.get("fill", "black")) is not None:
+            if elem.tag != "line" and stroke_role(_current_colour(style.get("fill", "black"), style)) is not None:
                 self.filled.append(where)
             return
         if role is None:

@@ -251,6 +251,15 @@ def test_border_drawn_past_its_corners_is_trimmed() -> None:
     assert [w for w in p.warnings if "border" in w] == [
         "trimmed 1 border stub(s) drawn past where the outline meets itself, up to 0.5 mm long, from outline"
     ]
+    # 3 mm past (2 % of the sheet): refused, saying where and by how much (it said to draw one loop)
+    far = [
+        CreaseCurve([line((-3, 0), (153, 0))], "B", None, source="bottom"),
+        CreaseCurve([line((150, -3), (150, 153))], "B", None, source="right"),
+        CreaseCurve([line((153, 150), (-3, 150))], "B", None, source="top"),
+        CreaseCurve([line((0, 153), (0, -3))], "B", None, source="left"),
+    ]
+    with pytest.raises(PatternError, match=r"drawn on past itself by 3 mm at \(.*\) mm, more than 1 % of the sheet"):
+        discretize([*far, crease])
 
 
 @pytest.mark.slow

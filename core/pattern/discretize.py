@@ -1561,7 +1561,8 @@ def _clip_to_border(
     """Step 4: refuse a self-crossing border, warn about an open one, remove crease pieces outside a closed one and
     move crease ends just short of it onto it (:func:`_snap_short_ends`; ``size``: the sheet's)."""
     attrs = _stray_border_as_cuts(verts, edges, attrs, pieces, sources, warnings)
-    edges, attrs = _trim_border_stubs(verts, edges, attrs, pieces, sources, SHORT_OF_BORDER_FRACTION * size, warnings)
+    reach = SHORT_OF_BORDER_FRACTION * size
+    edges, attrs, past = _trim_border_stubs(verts, edges, attrs, pieces, sources, reach, warnings)
     assign, edge_poly = pieces.assignment, pieces.polyline
     is_b = assign[attrs] == "B"
     if not is_b.any():
@@ -1576,7 +1577,7 @@ def _clip_to_border(
         names = _describe_sources(sources, edge_poly[attrs[at_b]])
         raise PatternError(
             f"the border crosses or touches itself at {pts} mm ({names})"
-            "; draw the outline of the sheet as one loop that does not cross itself"
+            + (past or "; draw the outline of the sheet as one loop that does not cross itself")
         )
     open_v = np.flatnonzero(deg % 2 == 1)
     if len(open_v):
@@ -1606,14 +1607,16 @@ def _trim_border_stubs(
     sources: list[str],
     reach: float,
     warnings: list[str],
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, str]:
     """Remove the border's stubs: a run of border pieces from a loose end to where three or more border pieces
-    meet, at most ``reach`` long (:data:`SHORT_OF_BORDER_FRACTION` of the sheet), with a warning. A square drawn
-    as four lines 0.3 mm past its corners (by eye, or a CAD program's lines) crosses itself at every corner and was
-    refused ("the border crosses or touches itself"), where a crease drawn past the border is trimmed."""
+    meet, at most ``reach`` long (:data:`SHORT_OF_BORDER_FRACTION` of the sheet), with a warning. A square drawn as
+    four lines 0.3 mm past its corners (by eye, or a CAD program's lines) crosses itself at every corner and was
+    refused ("the border crosses or touches itself"), where a crease drawn past the border is trimmed. Also
+    returns, for a longer stub (up to ten times that), the clause the refusal of the self-crossing border it leaves
+    adds ("" if none): it said to draw one loop, not that the lines overshoot."""
     is_b = pieces.assignment[attrs] == "B"
     if not is_b.any():
-        return edges, attrs
+        return edges, attrs, ""
     b_idx = np.flatnonzero(is_b)
     deg = np.bincount(edges[b_idx].ravel(), minlength=len(verts))
     incident: dict[int, list[int]] = {}
@@ -1622,6 +1625,7 @@ def _trim_border_stubs(
             incident.setdefault(v, []).append(k)
     drop: list[int] = []
     lengths: list[float] = []
+    long_stubs: list[tuple[int, float]] = []  # (where it meets the outline, length) of those not trimmed
     for start in np.flatnonzero(deg == 1).tolist():
         run, v, length = [], start, 0.0
         k = incident[start][0]
@@ -1629,14 +1633,23 @@ def _trim_border_stubs(
             run.append(k)
             w = int(edges[k, 0] if edges[k, 1] == v else edges[k, 1])
             length += float(np.hypot(*(verts[w] - verts[v])))
-            if length > reach or deg[w] != 2:
+            if length > 10 * reach or deg[w] != 2:
                 break
             v, k = w, next(e for e in incident[w] if e != k)
         if length <= reach and deg[w] >= 3:
             drop += run
             lengths.append(length)
+        elif deg[w] >= 3 and length <= 10 * reach:
+            long_stubs.append((w, length))
+    past = ""  # a stub left makes the outline cross itself: the refusal says where and how long
+    if long_stubs:
+        w, length = long_stubs[0]
+        past = (
+            f"; it is drawn on past itself by {length:.3g} mm at ({verts[w, 0]:.3f}, {verts[w, 1]:.3f}) mm, more "
+            f"than 1 % of the sheet ({reach:.3g} mm, what is trimmed): end the lines where they meet"
+        )
     if not drop:
-        return edges, attrs
+        return edges, attrs, past
     keep = np.ones(len(edges), dtype=bool)
     keep[drop] = False
     names = _describe_sources(sources, pieces.polyline[attrs[drop]])
@@ -1644,7 +1657,7 @@ def _trim_border_stubs(
         f"trimmed {len(lengths)} border stub(s) drawn past where the outline meets itself, up to "
         f"{max(lengths):.3g} mm long, from {names}"
     )
-    return edges[keep], attrs[keep]
+    return edges[keep], attrs[keep], past
 
 
 class _EndMover:

@@ -193,7 +193,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(
         f"{args.input}: {r['faces']} faces ({r['mesh_type']}, {r['generation_ms']:.0f} ms), "
-        f"{r['solver']} solver {r['simulation_ms']:.0f} ms, {r['iterations']} iterations, "
+        f"{r['solver']} solver {r['simulation_ms']:.0f} ms ({r['simulation_cpu_ms']:.0f} ms CPU), "
+        f"{r['iterations']} iterations, "
         f"{_convergence(r)} (residual {r['residual']:.1e})"
     )
     # None (nan) when no panel edge bends the authors' 0.5°: at 0 %, rigid panels, or panels bent smoothly over

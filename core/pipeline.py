@@ -113,6 +113,7 @@ def make_report(
         "percent": float(percent),
         "generation_ms": float(mesh.generation_ms),
         "simulation_ms": float(result.simulation_ms),
+        "simulation_cpu_ms": float(result.simulation_cpu_ms),
         "iterations": int(result.iterations),
         "force_evaluations": int(result.force_evaluations),
         "hessian_assemblies": int(result.hessian_assemblies),

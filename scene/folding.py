@@ -299,7 +299,7 @@ def solve_progress(
     chunk = check
     total = None
     x, theta, v = start, theta_prev, velocities
-    done_steps, evaluations, ms = 0, 0, 0.0
+    done_steps, evaluations, ms, cpu = 0, 0, 0.0, 0.0
     while True:
         n = min(chunk, s.max_steps - done_steps)
         t0 = time.perf_counter()
@@ -308,6 +308,7 @@ def solve_progress(
         done_steps += r.iterations
         evaluations += r.force_evaluations
         ms += r.simulation_ms
+        cpu += r.simulation_cpu_ms
         x, theta, v = r.positions, r.theta, r.velocities
         total = r
         if r.converged or done_steps >= s.max_steps or r.iterations < n:
@@ -319,7 +320,7 @@ def solve_progress(
         )
         per_step = dt_ms / max(r.iterations, 1)
         chunk = max(check, int(chunk_ms / max(per_step, 1e-6)) // check * check)
-    return replace(total, iterations=done_steps, force_evaluations=evaluations, simulation_ms=ms)
+    return replace(total, iterations=done_steps, force_evaluations=evaluations, simulation_ms=ms, simulation_cpu_ms=cpu)
 
 
 def _mesh_steps(pattern_units, angle, mesh_type) -> Generator[jobs.Progress, None, Any]:

@@ -247,7 +247,7 @@ def test_a_crease_that_stops_just_short_of_the_border_is_drawn_onto_it() -> None
     assert any(
         w.startswith("1 crease end(s) stopped short of the border and were moved onto it (0.3 mm at (40.000, -99.700))")
         and "from SVG <path id='short'>" in w
-        and "end them more than 1 mm inside" in w
+        and "so draw creases to the border (an end more than 1 mm inside is left where it is drawn)" in w
         for w in p.warnings
     ), p.warnings
     crease = p.edges[p.assignments == "M"]

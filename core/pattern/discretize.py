@@ -1792,8 +1792,8 @@ def _snap_short_ends(
         warnings.append(
             f"{len(moved)} crease end(s) stopped short of the border and were moved onto it ({where}), from "
             f"{_describe_sources(sources, pieces.polyline[[m[2] for m in moved]])}; a crease must reach the "
-            f"border to fold without stretching the paper. Draw creases to the border, or end them more than "
-            f"{reach:.2g} mm inside"
+            f"border to fold without stretching the paper, so draw creases to the border (an end more than "
+            f"{reach:.2g} mm inside is left where it is drawn)"
         )
     return mover.current()
 

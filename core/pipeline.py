@@ -91,6 +91,21 @@ def state_report(result: FoldResult) -> dict[str, Any]:
     return out
 
 
+def _flat_crease_warning(mesh: FoldMesh) -> list[str]:
+    """A warning naming the mountains and valleys whose fold angle is 0°: they stay flat, and a fold of nothing else
+    "converged" without a word (a designer session's Fold Angle left at 0 in Blender)."""
+    flat = np.isin(mesh.assignments, ("M", "V")) & (mesh.fold_angles == 0.0)
+    if not flat.any():
+        return []
+    polys = [int(k) for k in dict.fromkeys(mesh.edge_polyline[flat].tolist()) if 0 <= k < len(mesh.sources)]
+    names = ", ".join(mesh.sources[k] for k in polys[:4]) + (f" and {len(polys) - 4} more" if len(polys) > 4 else "")
+    return [
+        f"{len(polys) or int(flat.sum())} mountain/valley crease(s) with a fold angle of 0° stay flat"
+        + (f": {names}" if names else "")
+        + "; give them a fold angle (Fold Angle in Blender, opacity in SVG, edges_foldAngle in FOLD)"
+    ]
+
+
 def make_report(
     mesh: FoldMesh,
     result: FoldResult,
@@ -124,7 +139,7 @@ def make_report(
         "residual": float(result.residual),
         "energy": float(result.energy),
         "message": result.message,
-        "warnings": list(warnings),
+        "warnings": [*warnings, *_flat_crease_warning(mesh)],
         "exact_iterations": int(result.exact_iterations),
         "saddle_escapes": int(result.saddle_escapes),
         "continuation_steps": int(result.continuation_steps),

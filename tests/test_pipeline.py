@@ -224,3 +224,35 @@ def test_a_pattern_without_curve_pieces_is_meshed_without_loading_blender() -> N
         assert res.returncode == 0, res.stderr
         seen[name] = res.stdout.split()[-2:]
     assert seen == {"CircularPleat-antiFacet": ["3000", "False"], "Rotating_Star": ["804", "True"]}
+
+
+def test_a_crease_with_a_fold_angle_of_0_is_named(tmp_path):
+    """A valley whose Fold Angle was left at 0 in Blender (or edges_foldAngle 0 in a FOLD file) stays flat, and the
+    fold "converged" without a word (a designer session). The report names it; an SVG's opacity 0 says so once, as
+    the reader already did."""
+    from curved_fold.core.io.reader import read_pattern
+    from curved_fold.core.pipeline import fold_pattern
+
+    doc = {
+        "file_spec": 1.1,
+        "frame_unit": "mm",
+        "vertices_coords": [[0, 0], [50, 0], [100, 0], [100, 100], [50, 100], [0, 100]],
+        "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 4], [4, 5], [5, 0], [1, 4]],
+        "edges_assignment": ["B"] * 6 + ["V"],
+        "edges_foldAngle": [0] * 7,
+    }
+    path = tmp_path / "flat.fold"
+    path.write_text(json.dumps(doc))
+    warnings = fold_pattern(read_pattern(path)).report["warnings"]
+    assert [w for w in warnings if "fold angle of 0°" in w] == [
+        "1 mountain/valley crease(s) with a fold angle of 0° stay flat: flat.fold edge 6; give them a fold angle "
+        "(Fold Angle in Blender, opacity in SVG, edges_foldAngle in FOLD)"
+    ]
+    svg = tmp_path / "zero.svg"
+    svg.write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" viewBox="0 0 100 100">'
+        '<rect width="100" height="100" stroke="#000" fill="none"/>'
+        '<path d="M50,0 L50,100" stroke="#00f" fill="none" opacity="0"/></svg>'
+    )
+    warnings = fold_pattern(read_pattern(svg)).report["warnings"]
+    assert sum("stay flat" in w for w in warnings) == 1

@@ -22,7 +22,14 @@ from dataclasses import field as dc_field
 import bpy
 import numpy as np
 
-from .mesh_object import _crease_curve_objects, crease_point_indices, flat_rescale, local_offset, mm_per_unit
+from .mesh_object import (
+    _crease_curve_objects,
+    child_points,
+    crease_point_indices,
+    flat_rescale,
+    local_offset,
+    mm_per_unit,
+)
 
 KEY_PREFIX = "cf_frame_"
 
@@ -184,8 +191,8 @@ def bake_shape_keys(
         for child in children:
             idx = crease_point_indices(child)
 
-            def write_curve(key, co, idx=idx):
-                key.data.foreach_set("co", np.ascontiguousarray(co[idx]).ravel())
+            def write_curve(key, co, idx=idx, child=child):
+                key.data.foreach_set("co", np.ascontiguousarray(child_points(child, co[idx])).ravel())
 
             _key_sequence(child, frames, base, shapes, write_curve)
     except Exception:

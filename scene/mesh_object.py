@@ -252,7 +252,7 @@ def _write_crease_curves(ob: bpy.types.Object, mesh: FoldMesh, positions_bu: np.
             sp = cu.splines.new("POLY")
             sp.points.add(len(chain) - 1)
             co = np.ones((len(chain), 4), dtype=np.float32)
-            co[:, :3] = positions_bu[chain]
+            co[:, :3] = child_points(child, positions_bu[chain])
             sp.points.foreach_set("co", co.ravel())
         child["cf_chains"] = np.concatenate(chains).astype(np.int32).tolist()
         made.append(child)
@@ -340,15 +340,20 @@ def replace_fold_mesh(
     me = _new_mesh_data(mesh, positions, old.name, scene, offset)
     for mat in old.materials:
         me.materials.append(mat)
+    kept = {key: ob.get(key) and [float(x) for x in ob[key]] for key in (OFFSET_KEY, PROBE_KEY)}
     ob.data = me
-    remember_local(ob)
+    remember_local(ob, offset)
     try:
         write_pattern_attributes(ob, mesh, scene)
         ob.pop("cf_crease_topology", None)
         write_results(ob, mesh, positions, scene=scene, **results)
     except Exception:
         ob.data = old
-        remember_local(ob)
+        for key, value in kept.items():
+            if value is None:
+                ob.pop(key, None)
+            else:
+                ob[key] = value
         bpy.data.meshes.remove(me)
         raise
     name = old.name
@@ -431,10 +436,9 @@ def local_coordinates(ob: bpy.types.Object) -> np.ndarray:
 
 
 def local_offset(ob: bpy.types.Object) -> np.ndarray:
-    """The offset (BU) of ``ob``'s vertices from the engine's positions ÷ unit, brought up to date with any move of
-    its origin since the last write (:data:`OFFSET_KEY`): the shift of the vertices' mean from the probe is added,
-    and the crease-curve children are given their parent's frame again (Set Origin keeps children in place by
-    moving them the other way)."""
+    """The offset (BU) of ``ob``'s vertices from the engine's positions ÷ unit (:data:`OFFSET_KEY`), with any move
+    of its origin since the last write added: the shift of the vertices' mean from the probe. Reads only: a write
+    records it (:func:`remember_local`), so a cancelled job leaves the object's properties as they were."""
     offset = np.array(ob.get(OFFSET_KEY, (0.0, 0.0, 0.0)), dtype=np.float64)
     probe = ob.get(PROBE_KEY)
     if probe is None or len(ob.data.vertices) == 0:
@@ -442,19 +446,24 @@ def local_offset(ob: bpy.types.Object) -> np.ndarray:
     co = local_coordinates(ob)
     shift = co.mean(axis=0) - np.array(probe, dtype=np.float64)
     size = float(np.ptp(co, axis=0).max()) or 1.0
-    if np.abs(shift).max() > SHIFT_FRACTION * size:
-        offset = offset + shift
-        ob[OFFSET_KEY] = offset.tolist()
-        ob[PROBE_KEY] = co.mean(axis=0).tolist()
-        for child in _crease_curve_objects(ob).values():  # Set Origin moved them to stay in place
-            child.matrix_parent_inverse.identity()
-            child.matrix_basis.identity()
-    return offset
+    return offset + shift if np.abs(shift).max() > SHIFT_FRACTION * size else offset
 
 
-def remember_local(ob: bpy.types.Object, co: np.ndarray | None = None) -> None:
-    """Record the mean of ``ob``'s vertices as just written (``co``, BU; read if not given): :data:`PROBE_KEY`."""
+def child_points(child: bpy.types.Object, co: np.ndarray) -> np.ndarray:
+    """Points ``co`` (``(k, 3)``, the fold object's space) in the space of its crease-curve ``child``: Set Origin on
+    the fold object keeps its children in place by moving them the other way, so their frame may differ from it."""
+    m = np.array(child.matrix_parent_inverse) @ np.array(child.matrix_basis)
+    if np.array_equal(m, np.eye(4)):
+        return co
+    inv = np.linalg.inv(m)
+    return (np.asarray(co, dtype=np.float64) @ inv[:3, :3].T + inv[:3, 3]).astype(np.float32)
+
+
+def remember_local(ob: bpy.types.Object, offset: np.ndarray, co: np.ndarray | None = None) -> None:
+    """Record that ``ob``'s vertices were just written as ``co`` (BU; read if not given) with the origin ``offset``
+    (:data:`OFFSET_KEY`, :data:`PROBE_KEY`)."""
     co = local_coordinates(ob) if co is None else np.asarray(co, dtype=np.float32).astype(np.float64)
+    ob[OFFSET_KEY] = [float(x) for x in offset]
     if len(co):
         ob[PROBE_KEY] = co.mean(axis=0).tolist()
 
@@ -472,8 +481,8 @@ def update_positions(ob: bpy.types.Object, positions: np.ndarray, *, scene: bpy.
     children follow.
     """
     me = ob.data
-    offset = local_offset(ob)
-    co = (np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene) + offset).astype(np.float32)
+    origin = local_offset(ob)
+    co = (np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene) + origin).astype(np.float32)
     if len(co) != len(me.vertices):
         raise ValueError(f"object '{ob.name}' has {len(me.vertices)} vertices, got {len(co)} positions")
     if me.shape_keys is not None:
@@ -483,14 +492,14 @@ def update_positions(ob: bpy.types.Object, positions: np.ndarray, *, scene: bpy.
     for child in _crease_curve_objects(ob).values():
         idx = crease_point_indices(child)
         pts = np.ones((len(idx), 4), dtype=np.float32)
-        pts[:, :3] = co[idx]
+        pts[:, :3] = child_points(child, co[idx])
         offset = 0
         for sp in child.data.splines:
             k = len(sp.points)
             sp.points.foreach_set("co", pts[offset : offset + k].ravel())
             offset += k
         child.data.update_tag()
-    remember_local(ob, co)
+    remember_local(ob, origin, co)
 
 
 def write_results(

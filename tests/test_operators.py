@@ -747,6 +747,21 @@ def test_a_moved_origin_stays_where_the_designer_put_it(folded, extension):
     assert bpy.ops.object.origin_set(type="ORIGIN_GEOMETRY") == {"FINISHED"}
     shift = np.array(ob.location)
     assert np.abs(world(ob) - before).max() < 1e-6
+    # a re-fold cancelled part way (Esc) leaves the object, its properties and its crease curves as they were
+    jobs = importlib.import_module(extension.__name__ + ".scene.jobs")
+    folding = importlib.import_module(extension.__name__ + ".scene.folding")
+
+    def state():
+        kids = mesh_object._crease_curve_objects(ob).values()
+        props = {k: list(ob[k]) for k in ob.keys() if k.startswith("cf_local")}
+        return world(ob).tolist(), props, [np.array(c.matrix_world).tolist() for c in kids]
+
+    was = state()
+    job = jobs.start(folding.refold_job(ob, rebuild=True))
+    for _ in range(30):
+        jobs.run_slice(job, budget_ms=0.0)
+    jobs.cancel(job)
+    assert state() == was
     for rebuild in ("RESOLVE", "REBUILD"):
         assert bpy.ops.curved_fold.refold(rebuild=rebuild) == {"FINISHED"}, rebuild
         assert np.abs(world(ob) - before).max() < 1e-6, rebuild

@@ -839,7 +839,7 @@ def test_a_polyline_drawn_finer_than_the_tolerance_is_thinned() -> None:
     u = np.linspace(0.0, 1.0, 3001)
     lines = "".join(
         f'<polyline fill="none" stroke="{colour}" opacity="0.5" points="'
-        + " ".join(f"{x0 + 8.0 * math.sin(2 * math.pi * t)!r},{100.0 * t!r}" for t in u)
+        + " ".join(f"{x0 + 8.0 * math.sin(2 * math.pi * float(t))!r},{100.0 * float(t)!r}" for t in u)
         + '"/>'
         for x0, colour in ((40.0, "#0000ff"), (75.0, "#ff0000"), (110.0, "#0000ff"))
     )

@@ -216,10 +216,40 @@ def test_border_pieces_that_miss_at_several_corners_by_a_hair_are_joined() -> No
     p = discretize([*sides, crease])
     assert _one_loop(p)
     said = [w for w in p.warnings if "not closed" in w]
-    assert len(said) == 1 and said[0].startswith("the border is not closed at 4 places (bottom, left, right, top)")
+    assert len(said) == 1 and said[0].startswith("the border is not closed at 4 place(s) (")
     assert "up to 0.1414 mm long" in said[0]
     run = fold_pattern(p, percent=0.5)
     assert run.result.converged and run.report["crease_length_not_folding_pct"] == 0
+
+
+def test_slits_drawn_in_black_keep_their_bridges_and_an_outline_missing_its_start_closes() -> None:
+    """A review session's kirigami sheets: a square outline of four lines meeting at the corners, and black slits
+    with 1 mm paper bridges between them. Joining loose ends in pairs before the planar clean-up closed the bridges
+    and the sheet fell apart; the slits are cuts, their bridges stay. And an outline drawn as one stroke whose last
+    point lands 0.3 mm beside its start (nearer its first side than its start) is closed, as it was."""
+    sides = [
+        CreaseCurve([line((0, 0), (150, 0))], "B", None, source="bottom"),
+        CreaseCurve([line((150, 0), (150, 150))], "B", None, source="right"),
+        CreaseCurve([line((150, 150), (0, 150))], "B", None, source="top"),
+        CreaseCurve([line((0, 150), (0, 0))], "B", None, source="left"),
+    ]
+    slits = [
+        CreaseCurve([line((0, 75), (74.5, 75))], "B", None, source="slit a"),
+        CreaseCurve([line((75.5, 75), (150, 75))], "B", None, source="slit b"),
+    ]
+    crease = CreaseCurve([line((55, 0), (55, 150))], "V", 90.0, source="valley")
+    p = discretize([*sides, *slits, crease])
+    assert not any("not closed" in w for w in p.warnings), p.warnings
+    assert p.count("C") >= 2 and any("read as cuts" in w for w in p.warnings)
+    assert fold_pattern(p, percent=0.5).report["converged"]
+    outline = CreaseCurve(
+        [line((0, 0), (150, 0)), line((150, 0), (150, 150)), line((150, 150), (0, 150)), line((0, 150), (0.4, 0.3))],
+        "B",
+        None,
+        source="outline",
+    )
+    p = discretize([outline, crease])
+    assert _one_loop(p) and any(w.startswith("the border is not closed (outline): joined") for w in p.warnings)
 
 
 def test_border_drawn_past_its_corners_is_trimmed() -> None:

@@ -1402,22 +1402,18 @@ def _outer_boundary(verts: np.ndarray, e: np.ndarray, core: np.ndarray) -> np.nd
 def _close_open_border(
     curves: list[CreaseCurve], merge_tolerance: float, reach: float, warnings: list[str]
 ) -> list[CreaseCurve]:
-    """Close a border left open: when the border strokes together have exactly two loose ends (ends that meet no
-    other border end within ``merge_tolerance``), a straight border stroke joins them; with more, each pair of
-    loose ends that are each other's nearest and within ``reach`` (:data:`SHORT_OF_BORDER_FRACTION` of the sheet)
-    is joined, as long as no other border stroke passes nearer to either end (:func:`_pairs_of_gaps`); with a
-    warning.
+    """Close a border left open at one place: when the border strokes together have exactly two loose ends (ends
+    that meet no other border end within ``merge_tolerance``), a straight border stroke joins them, with a warning,
+    unless one of them overshoots (:func:`_pairs_of_gaps`; ``reach``: how near).
 
     A rectangle drawn as four points with Cyclic forgotten, or an outline whose last point misses its first by a
     fraction of a millimetre, is what the designer sees as the sheet's outline; left open, the border separated no
     paper from outside, so the crease nearest the gap became the sheet's edge and the strip beyond it was dropped.
-    A square drawn as four lines that miss each other by 0.1 mm at two corners was left open (a designer session:
-    "converged" in 0 iterations, no crease with paper on both sides; at four corners "no paper left"). An end that
-    lies nearer another border stroke than any loose end overshoots it (lines drawn past the corners): it is no gap,
-    and the stub is trimmed later (:func:`_trim_border_stubs`). A black line whose loose end lies on or inside a
-    closed border stroke (a slit from the edge, a line across or inside the sheet) is no gap in the outline:
-    :func:`_stray_border_as_cuts` makes it a cut (closing it drew a straight chord across the sheet that was never
-    drawn)."""
+    Borders open at several places are joined after the planar clean-up, where they close by a hair
+    (:func:`_join_border_gaps`), and otherwise warned about where the segments are clipped. A black line whose loose
+    end lies on or inside a closed border stroke (a slit from the edge, a line across or inside the sheet) is no gap
+    in the outline: :func:`_stray_border_as_cuts` makes it a cut (closing it drew a straight chord across the sheet
+    that was never drawn)."""
     ends = [
         (k, side, c.segments[0].points[0] if side == 0 else c.segments[-1].points[-1])
         for k, c in enumerate(curves)
@@ -1428,49 +1424,28 @@ def _close_open_border(
         return curves
     pts = np.array([p for _, _, p in ends], dtype=np.float64)
     loose = np.flatnonzero(_ends_met(pts, merge_tolerance) % 2 == 0)  # an end met an odd number of times is joined
-    if len(loose) < 2 or _on_or_inside_closed_border(pts[loose], curves, SNAP_FACTOR * merge_tolerance).any():
+    if len(loose) != 2 or _on_or_inside_closed_border(pts[loose], curves, SNAP_FACTOR * merge_tolerance).any():
         return curves
-    pairs = _pairs_of_gaps(curves, ends, pts, loose, merge_tolerance, reach)
-    closing, gaps, names = [], [], set()
-    for i, j in pairs:
-        a, b = pts[i], pts[j]
-        gap = float(np.hypot(*(b - a)))
-        if gap <= merge_tolerance:
-            continue
-        here = sorted({curves[ends[x][0]].source or f"curve {ends[x][0]}" for x in (i, j)})
-        names.update(here)
-        gaps.append((a, b, gap))
-        closing.append(
-            CreaseCurve(
-                [CurveSegment("line", np.array([a, b]))],
-                "B",
-                None,
-                source=f"the straight edge closing {' and '.join(here)}",
-            )
-        )
-    if not closing:
+    if not _pairs_of_gaps(curves, ends, pts, loose, merge_tolerance, reach):
         return curves
-    shown = sorted(names)
-    listed = ", ".join(shown[:4]) + (f" and {len(shown) - 4} more" if len(shown) > 4 else "")
-    if len(gaps) == 1:
-        ((a, b, gap),) = gaps
-        warnings.append(
-            f"the border is not closed ({listed}): joined its loose ends at ({a[0]:.3f}, {a[1]:.3f}) and "
-            f"({b[0]:.3f}, {b[1]:.3f}) mm with a straight edge, {gap:.4g} mm long (close the outline where you drew "
-            "it, e.g. Cyclic in Blender, Z in SVG)"
-        )
-    else:
-        where = ", ".join(f"({a[0]:.3f}, {a[1]:.3f})" for a, _, _ in gaps[:4]) + (", ..." if len(gaps) > 4 else "")
-        warnings.append(
-            f"the border is not closed at {len(gaps)} places ({listed}): joined each pair of loose ends with a "
-            f"straight edge, up to {max(g for _, _, g in gaps):.4g} mm long, at {where} mm (make the pieces of the "
-            "outline meet where you drew them)"
-        )
-    return [*curves, *closing]
+    a, b = pts[loose[0]], pts[loose[1]]
+    gap = float(np.hypot(*(b - a)))
+    if gap <= merge_tolerance:
+        return curves
+    names = sorted({curves[ends[i][0]].source or f"curve {ends[i][0]}" for i in loose})
+    closing = CreaseCurve(
+        [CurveSegment("line", np.array([a, b]))], "B", None, source=f"the straight edge closing {' and '.join(names)}"
+    )
+    warnings.append(
+        f"the border is not closed ({', '.join(names)}): joined its loose ends at ({a[0]:.3f}, {a[1]:.3f}) and "
+        f"({b[0]:.3f}, {b[1]:.3f}) mm with a straight edge, {gap:.4g} mm long (close the outline where you drew it, "
+        "e.g. Cyclic in Blender, Z in SVG)"
+    )
+    return [*curves, closing]
 
 
 MAX_GAP_ENDS = 400
-"""Loose border ends beyond which :func:`_pairs_of_gaps` pairs none (its distances are all pairs)."""
+"""Loose border ends beyond which :func:`_join_border_gaps` pairs none (its distances are all pairs)."""
 
 
 def _pairs_of_gaps(
@@ -1481,49 +1456,68 @@ def _pairs_of_gaps(
     merge_tolerance: float,
     reach: float,
 ) -> list[tuple[int, int]]:
-    """Pairs of ``loose`` border ends (indices into ``ends``/``pts``) to join. Two loose ends are joined unless one
-    lies on another border piece (within the merge tolerance: a stroke drawn past its own start ends on it). Of
-    more, each pair that are each other's nearest, within ``reach``, and nearer to each other than to any other
-    border piece (an end nearer another piece overshoots it: the border drawn past a corner; its stub is trimmed
-    later, :func:`_trim_border_stubs`). Also for two ends within ``reach`` of each other."""
-    if len(loose) > MAX_GAP_ENDS:
+    """The two ``loose`` border ends (indices into ``ends``/``pts``) as a pair to join, unless one's stroke crosses
+    or touches another border piece within ``reach`` of it: it overshoots (a stroke drawn past its own start, lines
+    past a corner), and its stub is trimmed later (:func:`_trim_border_stubs`)."""
+    pieces = [
+        (k, g, seg.evaluate(np.linspace(0.0, 1.0, 33)))
+        for k, c in enumerate(curves)
+        if c.assignment == "B"
+        for g, seg in enumerate(c.segments)
+    ]
+    boxes = np.array([[*line.min(axis=0), *line.max(axis=0)] for _, _, line in pieces])
+    if any(_overshoots(curves, ends[int(x)], pieces, boxes, merge_tolerance, reach) for x in loose.tolist()):
         return []
-    q = pts[loose]
-    d = np.hypot(*(q[:, None, :] - q[None, :, :]).transpose(2, 0, 1))
-    np.fill_diagonal(d, np.inf)
-    nearest = np.argmin(d, axis=1)
-    # every border piece sampled, each with its stroke and segment, so an end is measured against all but its own
-    seg_a, seg_b, whose = [], [], []
-    for k, c in enumerate(curves):
-        if c.assignment != "B":
-            continue
-        for g, seg in enumerate(c.segments):
-            line = seg.evaluate(np.linspace(0.0, 1.0, 33))
-            seg_a.append(line[:-1])
-            seg_b.append(line[1:])
-            whose += [(k, g)] * 32
-    a_all, b_all = np.concatenate(seg_a), np.concatenate(seg_b)
-    stroke = np.array([k for k, _ in whose], dtype=np.int64)
-    piece = np.array([g for _, g in whose], dtype=np.int64)
+    return [(int(loose[0]), int(loose[1]))]
 
-    def nearest_other_piece(x: int) -> float:
-        k, side, p = ends[int(loose[x])]
-        own = (stroke == k) & (piece == (0 if side == 0 else len(curves[k].segments) - 1))
-        if own.all():
-            return math.inf
-        other = ~own
-        return float(point_segment_distance(np.broadcast_to(p, a_all[other].shape), a_all[other], b_all[other]).min())
 
-    pairs = []
-    for a in range(len(loose)):
-        b = int(nearest[a])
-        if b <= a or nearest[b] != a or (len(loose) > 2 and d[a, b] > reach):
-            continue
-        near = min(nearest_other_piece(a), nearest_other_piece(b))
-        if near <= merge_tolerance or (d[a, b] <= reach and near + merge_tolerance < d[a, b]):
-            continue
-        pairs.append((int(loose[a]), int(loose[b])))
-    return pairs
+def _overshoots(
+    curves: list[CreaseCurve],
+    end: tuple[int, int, np.ndarray],
+    pieces: list[tuple[int, int, np.ndarray]],
+    boxes: np.ndarray,
+    tol: float,
+    reach: float,
+) -> bool:
+    """Whether the stroke of ``end`` (its index, side and point) crosses or touches another border piece within
+    ``reach`` of that end (``pieces``: stroke, segment and samples of each border piece, ``boxes`` their bounding
+    boxes): an end drawn past a corner, or past the stroke's own start."""
+    k, side, p = end
+    own = 0 if side == 0 else len(curves[k].segments) - 1
+    tail = curves[k].segments[own].evaluate(np.linspace(0.0, 1.0, 33) if side == 0 else np.linspace(1.0, 0.0, 33))
+    within = np.hypot(*(tail - p).T) <= reach
+    tail = tail[: max(2, int(np.argmin(within)) if not within.all() else len(tail))]
+    lo, hi = tail.min(axis=0) - tol, tail.max(axis=0) + tol
+    near = np.flatnonzero(np.all(boxes[:, :2] <= hi, axis=1) & np.all(boxes[:, 2:] >= lo, axis=1))
+    for n in near.tolist():
+        m, g, line = pieces[n]
+        if (m, g) != (k, own) and _chains_meet(tail[:-1], tail[1:], line[:-1], line[1:], tol):
+            return True
+    return False
+
+
+def _chains_meet(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray, b1: np.ndarray, tol: float) -> bool:
+    """Whether any segment ``a0[i]–a1[i]`` crosses any ``b0[j]–b1[j]``, or an end of one lies within ``tol`` of
+    the other."""
+
+    def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+    A0, A1, B0, B1 = a0[:, None], a1[:, None], b0[None], b1[None]
+    r, q = A1 - A0, B1 - B0
+    d1, d2 = cross(r, B0 - A0), cross(r, B1 - A0)
+    d3, d4 = cross(q, A0 - B0), cross(q, A1 - B0)
+    if np.any((d1 * d2 < 0) & (d3 * d4 < 0)):
+        return True
+    ends_a = np.concatenate([a0, a1[-1:]])
+    ends_b = np.concatenate([b0, b1[-1:]])
+    near_b = point_segment_distance(
+        np.repeat(ends_a, len(b0), axis=0), np.tile(b0, (len(ends_a), 1)), np.tile(b1, (len(ends_a), 1))
+    )
+    near_a = point_segment_distance(
+        np.repeat(ends_b, len(a0), axis=0), np.tile(a0, (len(ends_b), 1)), np.tile(a1, (len(ends_b), 1))
+    )
+    return bool(near_b.min() <= tol or near_a.min() <= tol)
 
 
 def _on_or_inside_closed_border(points: np.ndarray, curves: list[CreaseCurve], tol: float) -> np.ndarray:
@@ -1563,6 +1557,7 @@ def _clip_to_border(
     attrs = _stray_border_as_cuts(verts, edges, attrs, pieces, sources, warnings)
     reach = SHORT_OF_BORDER_FRACTION * size
     edges, attrs, past = _trim_border_stubs(verts, edges, attrs, pieces, sources, reach, warnings)
+    edges, attrs = _join_border_gaps(verts, edges, attrs, pieces, sources, reach, warnings)
     assign, edge_poly = pieces.assignment, pieces.polyline
     is_b = assign[attrs] == "B"
     if not is_b.any():
@@ -1597,6 +1592,68 @@ def _clip_to_border(
         keep[outside] = False
         edges, attrs = edges[keep], attrs[keep]
     return _snap_short_ends(verts, edges, attrs, pieces, sources, size, merge_tolerance, warnings)
+
+
+def _join_border_gaps(
+    verts: np.ndarray,
+    edges: np.ndarray,
+    attrs: np.ndarray,
+    pieces: _Pieces,
+    sources: list[str],
+    reach: float,
+    warnings: list[str],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Join the border's loose ends in pairs where that closes it: each the other's nearest loose end, within
+    ``reach`` (:data:`SHORT_OF_BORDER_FRACTION` of the sheet), and the pieces they join left without a loose end
+    (an outline drawn as pieces that miss each other by a hair at its corners), with a straight border piece and one
+    warning. After the black lines inside the sheet became cuts (:func:`_stray_border_as_cuts`) and the stubs past
+    its corners were trimmed: the slits of a kirigami lattice, and the paper bridges between them, stay as drawn
+    (joined before the clean-up, a review session's lattice fell apart). A square drawn as four lines 0.1 mm apart
+    at two corners folded nothing ("converged" in 0 iterations), at four "no paper left" (a designer session)."""
+    is_b = pieces.assignment[attrs] == "B"
+    b_idx = np.flatnonzero(is_b)
+    deg = np.bincount(edges[b_idx].ravel(), minlength=len(verts))
+    loose = np.flatnonzero(deg == 1)
+    if len(loose) < 2 or len(loose) > MAX_GAP_ENDS:
+        return edges, attrs
+    q = verts[loose]
+    d = np.hypot(*(q[:, None, :] - q[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    nearest = np.argmin(d, axis=1)
+    pairs = [(a, int(b)) for a, b in enumerate(nearest.tolist()) if b > a and nearest[b] == a and d[a, b] <= reach]
+    if not pairs:
+        return edges, attrs
+    # keep the pairs whose border pieces (joined at vertices) are left with no loose end: an outline closed
+    group = list(range(len(verts)))
+
+    def root(v: int) -> int:
+        while group[v] != v:
+            group[v] = group[group[v]]
+            v = group[v]
+        return v
+
+    for a, b in edges[b_idx].tolist():
+        group[root(a)] = root(b)
+    for a, b in pairs:
+        group[root(int(loose[a]))] = root(int(loose[b]))
+    paired = {x for pair in pairs for x in pair}
+    still_open = {root(int(loose[x])) for x in range(len(loose)) if x not in paired}
+    pairs = [(a, b) for a, b in pairs if root(int(loose[a])) not in still_open]
+    if not pairs:
+        return edges, attrs
+    new_edges = np.array([[loose[a], loose[b]] for a, b in pairs], dtype=edges.dtype)
+    # each takes the attributes of the border piece at its first end (its role, source)
+    at = {int(v): k for k in b_idx.tolist() for v in edges[k].tolist()}
+    new_attrs = np.array([attrs[at[int(loose[a])]] for a, _ in pairs], dtype=attrs.dtype)
+    gaps = [float(d[a, b]) for a, b in pairs]
+    where = ", ".join(f"({verts[loose[a], 0]:.3f}, {verts[loose[a], 1]:.3f})" for a, _ in pairs[:4])
+    names = _describe_sources(sources, pieces.polyline[new_attrs])
+    warnings.append(
+        f"the border is not closed at {len(pairs)} place(s) ({names}): joined each pair of loose ends with a "
+        f"straight edge, up to {max(gaps):.4g} mm long, at {where}{', ...' if len(pairs) > 4 else ''} mm (make the "
+        "pieces of the outline meet where you drew them)"
+    )
+    return np.concatenate([edges, new_edges]), np.concatenate([attrs, new_attrs])
 
 
 def _trim_border_stubs(

@@ -419,13 +419,21 @@ def _blender_face_order(me: bpy.types.Mesh, mesh: FoldMesh) -> np.ndarray:
 OFFSET_KEY, PROBE_KEY = "cf_local_offset", "cf_local_probe"
 """A fold object's vertices sit at the engine's positions (mm, the pattern's frame) ÷ the unit, plus ``cf_local_offset``
 (Blender units): zero until the designer moves the object's origin (Set Origin, or Snap ▸ Cursor to Selected and
-Origin to 3D Cursor), which shifts every vertex the other way. ``cf_local_probe`` is the mean of the vertices as
-last written; a later write or read finds the shift from it (:func:`local_offset`). Re-folding an object whose
+Origin to 3D Cursor), which shifts every vertex the other way. ``cf_local_probe`` holds :data:`PROBES` vertices as
+last written; a later write or read finds the shift from them (:func:`local_offset`). Re-folding an object whose
 origin had been set to its geometry moved the mesh away by the shift (83 mm on the single-curve example)."""
 
+PROBES = 8
+"""Vertices (spread over the mesh's order) whose move tells an origin shift: all of them by the same vector (a few
+edited vertices are not one; a review session's edit of one vertex was taken for a shift of the whole mesh)."""
+
 SHIFT_FRACTION = 1e-4
-"""A move of the vertices' mean by more than this fraction of the mesh's size since the last write is an origin
-shift (an edit of one vertex of a 1,600-vertex mesh moves it by ~1e-6 of the size)."""
+"""A common move of the probe vertices by more than this fraction of the mesh's size since the last write is an
+origin shift."""
+
+
+def _probe_indices(n: int) -> np.ndarray:
+    return np.unique(np.linspace(0, n - 1, min(PROBES, n)).astype(np.int64)) if n else np.zeros(0, dtype=np.int64)
 
 
 def local_coordinates(ob: bpy.types.Object) -> np.ndarray:
@@ -437,16 +445,23 @@ def local_coordinates(ob: bpy.types.Object) -> np.ndarray:
 
 def local_offset(ob: bpy.types.Object) -> np.ndarray:
     """The offset (BU) of ``ob``'s vertices from the engine's positions ÷ unit (:data:`OFFSET_KEY`), with any move
-    of its origin since the last write added: the shift of the vertices' mean from the probe. Reads only: a write
-    records it (:func:`remember_local`), so a cancelled job leaves the object's properties as they were."""
+    of its origin since the last write added: the move of the probe vertices, where most of them moved alike (an
+    origin shift moves all). Reads only: a write records it (:func:`remember_local`), so a cancelled job leaves the
+    object's properties as they were."""
     offset = np.array(ob.get(OFFSET_KEY, (0.0, 0.0, 0.0)), dtype=np.float64)
     probe = ob.get(PROBE_KEY)
-    if probe is None or len(ob.data.vertices) == 0:
+    n = len(ob.data.vertices)
+    idx = _probe_indices(n)
+    if probe is None or len(probe) != 3 * len(idx) or n == 0:
         return offset
     co = local_coordinates(ob)
-    shift = co.mean(axis=0) - np.array(probe, dtype=np.float64)
+    moves = co[idx] - np.array(probe, dtype=np.float64).reshape(-1, 3)
+    shift = np.median(moves, axis=0)
     size = float(np.ptp(co, axis=0).max()) or 1.0
-    return offset + shift if np.abs(shift).max() > SHIFT_FRACTION * size else offset
+    alike = np.abs(moves - shift).max(axis=1) <= 1e-6 * size
+    if np.abs(shift).max() > SHIFT_FRACTION * size and alike.sum() > len(idx) // 2:
+        return offset + shift
+    return offset
 
 
 def child_points(child: bpy.types.Object, co: np.ndarray) -> np.ndarray:
@@ -464,8 +479,7 @@ def remember_local(ob: bpy.types.Object, offset: np.ndarray, co: np.ndarray | No
     (:data:`OFFSET_KEY`, :data:`PROBE_KEY`)."""
     co = local_coordinates(ob) if co is None else np.asarray(co, dtype=np.float32).astype(np.float64)
     ob[OFFSET_KEY] = [float(x) for x in offset]
-    if len(co):
-        ob[PROBE_KEY] = co.mean(axis=0).tolist()
+    ob[PROBE_KEY] = co[_probe_indices(len(co))].ravel().tolist()
 
 
 def engine_positions(ob: bpy.types.Object, scene: bpy.types.Scene | None = None) -> np.ndarray:

@@ -108,10 +108,15 @@ class CURVED_FOLD_OT_fold(JobOperator, bpy.types.Operator):
 
     def done(self, context, result) -> None:
         ob, out = result
-        for other in context.selected_objects:
-            other.select_set(False)
-        ob.select_set(True)
-        context.view_layer.objects.active = ob
+        if context.view_layer.objects.get(ob.name) is ob:
+            for other in context.selected_objects:
+                other.select_set(False)
+            ob.select_set(True)
+            context.view_layer.objects.active = ob
+        else:  # made beside its curves, in a collection excluded from the view layer: not selectable (a traceback)
+            self.report(
+                {"WARNING"}, f"'{ob.name}' is in a collection excluded from the view layer: include it to see it"
+            )
         for warning in out.warnings[:5]:
             self.report({"WARNING"}, warning)
         props = ob.curved_fold_mesh

@@ -100,19 +100,21 @@ def _hidden_note(names: list[str], where: str) -> list[str]:
 
 def _hidden_below(collection: bpy.types.Collection, layer) -> set[str]:
     """Names of the objects of ``collection`` the viewport hides in the view layer ``layer``: hidden (H), disabled
-    in viewports, or in a collection below ``collection`` that is excluded, hidden or disabled there."""
+    in viewports, or only in collections below ``collection`` that are excluded, hidden or disabled there (one also
+    linked into a shown collection is shown: a review session's crease in both was left out)."""
     hidden = {ob.name for ob in collection.all_objects if ob.hide_viewport or _hidden_in(ob, layer)}
     top = _layer_collection(layer.layer_collection, collection) if layer is not None else None
     if top is None:
         return hidden
+    shown = {ob.name for ob in collection.objects}
     stack = [(child, False) for child in top.children]
     while stack:
         lc, unseen = stack.pop()
         unseen = unseen or lc.exclude or lc.hide_viewport or lc.collection.hide_viewport
-        if unseen:
-            hidden.update(ob.name for ob in lc.collection.objects)
+        if not unseen:
+            shown.update(ob.name for ob in lc.collection.objects)
         stack.extend((child, unseen) for child in lc.children)
-    return hidden
+    return hidden | ({ob.name for ob in collection.all_objects} - shown)
 
 
 def _layer_collection(root, collection: bpy.types.Collection):

@@ -650,7 +650,8 @@ def test_hidden_crease_curves_are_left_out_of_a_collection_fold_through_every_do
     def crease(name, pts, role, collection):
         return make_curve(name, [np.array(pts, float)], role, 108.0, collection=collection)
 
-    crease("Valley", [[0, 50], [50, 90], [100, 90], [150, 60]], "VALLEY", pattern)
+    valley = crease("Valley", [[0, 50], [50, 90], [100, 90], [150, 60]], "VALLEY", pattern)
+    old.objects.link(valley)  # also in the excluded sub-collection: still shown (a review session: left out)
     hidden = crease("Hidden", [[0, 100], [50, 130], [100, 130], [150, 110]], "MOUNTAIN", pattern)
     disabled = crease("Disabled", [[50, 0], [60, 50], [60, 100], [50, 150]], "MOUNTAIN", pattern)
     crease("Excluded", [[100, 0], [110, 50], [110, 100], [100, 150]], "MOUNTAIN", old)
@@ -673,3 +674,13 @@ def test_hidden_crease_curves_are_left_out_of_a_collection_fold_through_every_do
         assert any("hidden crease curve(s)" in w for w in pattern_read.warnings), collection
     visible_only = reader.read_pattern(path, collection="Pattern")
     assert visible_only.count("M") == 0 and visible_only.count("V") > 0
+    # a collection excluded from the view layer folds too (the fold, made beside its curves, is not selectable:
+    # selecting it raised a traceback)
+    bpy.context.view_layer.layer_collection.children["Pattern"].exclude = True
+    bpy.context.view_layer.update()
+    made = set(bpy.data.objects)
+    assert bpy.ops.curved_fold.fold(collection="Pattern") == {"FINISHED"}
+    assert any(
+        getattr(ob, "curved_fold_mesh", None) and ob.curved_fold_mesh.is_fold_mesh
+        for ob in set(bpy.data.objects) - made
+    )

@@ -527,6 +527,7 @@ def _shown_in(scene) -> tuple[set[str], list[bpy.types.Collection], set[str]]:
     layer = scene.view_layers[0]
     shown: set[str] = set()
     hidden: set[str] = set()
+    seen: set[str] = set()
     excluded: list[bpy.types.Collection] = []
     stack = [(layer.layer_collection, False)]  # its collection is the scene's own
     while stack:
@@ -539,8 +540,10 @@ def _shown_in(scene) -> tuple[set[str], list[bpy.types.Collection], set[str]]:
             shown.add(ob.name)
             if unseen or ob.hide_viewport or _hidden_in(ob, layer):
                 hidden.add(ob.name)
+            else:
+                seen.add(ob.name)  # in a shown collection: shown, whatever other collections hold it
         stack.extend((child, unseen) for child in lc.children)
-    return shown, excluded, hidden
+    return shown, excluded, hidden - seen
 
 
 def _hidden_in(ob: bpy.types.Object, layer) -> bool:

@@ -882,3 +882,27 @@ def test_a_polyline_drawn_finer_than_the_tolerance_is_thinned() -> None:
     mesh = build_mesh(pattern)
     assert mesh.n_faces < 400 and corner_angles(mesh.vertices, mesh.triangles).min() > 1.0
     assert time.process_time() - t0 < 5.0  # it took 40 s with the fold
+
+
+def test_thinning_a_tight_spiral_takes_bounded_memory() -> None:
+    """A review session's 20,000-point spiral of 0.15 mm pitch: thousands of its points lie within the interval of
+    each start, and the candidate chords' arrays (count × count) took 12 GB before the process was killed (6,000
+    points: 12 s, 560 MB). A chord is looked for only as far along the polyline as twice the interval."""
+    import tracemalloc
+
+    from curved_fold.core.pattern.polylines import thin_dense_polylines
+
+    n = 8_000  # 20,000 before the process was killed; 8,000 needed ~1 GB
+    th = np.linspace(0.0, n / 100 * np.pi, n)
+    r = 1.0 + 0.15 * th / (2 * np.pi)
+    v = np.c_[r * np.cos(th), r * np.sin(th)]
+    e = np.c_[np.arange(n - 1), np.arange(1, n)]
+    tracemalloc.start()
+    t0 = time.process_time()
+    kept, chords, _ = thin_dense_polylines(
+        v, e, np.array(["V"] * (n - 1)), np.full(n - 1, 90.0), np.ones(n - 1, bool), 5.0, 0.1
+    )
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 150e6 and time.process_time() - t0 < 30.0
+    assert 0 < int(kept.sum()) + len(chords) < n // 2  # thinned

@@ -276,6 +276,10 @@ def _beside(v: np.ndarray, chain: np.ndarray, i: int, j: int, tolerance: float) 
     return set(chain[lo : hi + 1].tolist())
 
 
+MAX_REACH = 2048
+"""Most pieces one chord may replace when thinning a polyline (:func:`_reach`): bounds its count × count arrays."""
+
+
 def _reach(points: np.ndarray, interval: float, tolerance: float) -> int:
     """How many pieces of the polyline ``points`` (from its first point) one chord can replace: the largest ``j``
     whose chord ``points[0]``–``points[j]``, and every shorter one, is within ``interval`` and keeps the points it
@@ -284,6 +288,11 @@ def _reach(points: np.ndarray, interval: float, tolerance: float) -> int:
     reach = np.hypot(*(points[1:] - a).T) <= interval
     reach[0] = True
     count = int(np.argmin(reach)) if not reach.all() else len(reach)  # chords 1..count are short enough
+    # and no longer along the polyline than twice the interval (what a chord within the tolerance of it can
+    # replace): a tight spiral keeps thousands of points within the interval of its start, and the arrays below
+    # are count × count (a review session's 20,000-point spiral took 12 GB)
+    along = np.cumsum(np.hypot(*np.diff(points[: count + 1], axis=0).T))
+    count = min(count, max(1, int(np.searchsorted(along, 2.0 * interval, side="right"))), MAX_REACH)
     if count < 2:
         return 1
     ends, inner = points[1 : count + 1], points[1:count]  # chord ends j = 1..count, the points they may skip

@@ -318,6 +318,16 @@ def test_another_tools_crossing_edges_are_split_as_a_drawings(tmp_path: Path) ->
     assert crossed.result.converged and by_hand.result.converged
     assert crossed.mesh.n_faces == by_hand.mesh.n_faces
     assert crossed.result.energy == pytest.approx(by_hand.result.energy, rel=1e-9)
+    # a T: the warning names the edge touched and the one whose end touches it, where (it named the two
+    # lowest-numbered edges split anywhere: two border edges that do not touch, a review session)
+    t_doc = {"edges_vertices": border + [[5, 2], [6, 8]], "edges_assignment": ["B"] * 6 + ["V", "C"]}
+    t_doc["edges_foldAngle"] = [0.0] * 6 + [90.0, 0.0]
+    t_path = tmp_path / "t.fold"
+    t_path.write_text(
+        json.dumps({"file_spec": 1.1, "frame_unit": "mm", "vertices_coords": coords + [[50.0, 50.0]]} | t_doc)
+    )
+    t_said = [w for w in read_pattern(t_path).warnings if "cross or touch" in w]
+    assert t_said and "first t.fold edge 6 and t.fold edge 7, near (50, 50) mm" in t_said[0]
     said = [w for w in crossed.report["warnings"] if "cross or touch" in w]
     assert said == [
         "2 edge(s) cross or touch other edges away from a vertex (first cross.fold edge 6 and cross.fold edge 7, "

@@ -784,8 +784,17 @@ def with_crossings_split(pattern: CreasePattern) -> CreasePattern:
     verts, edges, attrs = _planar_arrangement(pieces, tol, pattern.sources)
     edges, attrs = _remove_duplicates(edges, attrs, pieces, pattern.sources, warnings)
     split = np.unique(rec[0])
-    where = rec[3][0] if len(rec[3]) else pattern.vertices[rec[2][0]]
-    names = " and ".join(dict.fromkeys(pattern.sources[k] for k in pattern.edge_polyline[split[:2]].tolist()))
+    # the first place and the edges that meet there: both split at a crossing's new point, or one split at the
+    # other's end (a T); not the two lowest-numbered edges split anywhere (a review session's warning named two
+    # border edges that do not touch)
+    e0, v0 = int(rec[0][0]), int(rec[2][0])
+    if v0 < 0:
+        where = rec[3][-1 - v0]
+        pair = [e0, *[int(e) for e in rec[0][rec[2] == v0].tolist() if e != e0][:1]]
+    else:
+        where = pattern.vertices[v0]
+        pair = [e0, *[int(e) for e in np.flatnonzero((pattern.edges == v0).any(axis=1)).tolist()][:1]]
+    names = " and ".join(dict.fromkeys(pattern.sources[k] for k in pattern.edge_polyline[pair].tolist()))
     said = (
         f"{len(split)} edge(s) cross or touch other edges away from a vertex (first {names}, near "
         f"({where[0]:.4g}, {where[1]:.4g}) mm): split there, as a drawing's crossings are"

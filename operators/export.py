@@ -123,10 +123,14 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
 
     def execute(self, context):
         ob = context.active_object
+        asked = self.filepath
         typed = _FORMAT_OF.get(Path(self.filepath).suffix.lower())
         if typed is not None and not self.properties.is_property_set("file_format"):
             self.file_format = typed  # a script's filepath="m1.stl" writes STL; a format given wins
-        self._with_suffix()
+        if self._with_suffix() and Path(asked).suffix:  # another extension: say so (it was renamed silently)
+            self.report(
+                {"WARNING"}, f"'{Path(asked).name}' written as '{Path(self.filepath).name}' ({self.file_format})"
+            )
         try:
             mesh = mesh_object.read_fold_mesh(ob)
             frames, positions = folded_frames(ob)
@@ -196,6 +200,8 @@ class CURVED_FOLD_OT_export_pattern_svg(bpy.types.Operator, ExportHelper):
     def execute(self, context):
         ob = context.active_object
         if Path(self.filepath).suffix.lower() != ".svg":  # a script's filepath without it (the browser adds it)
+            if Path(self.filepath).suffix:
+                self.report({"WARNING"}, f"'{Path(self.filepath).name}' written as '{Path(self.filepath).name}.svg'")
             self.filepath += ".svg"
         try:
             layout = "cutter" if self.layout == "CUTTER" else "origami-simulator"

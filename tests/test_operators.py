@@ -354,7 +354,7 @@ def test_export_operators_write_files_blender_reimports(folded, tmp_path):
     assert all(len(fr["edges_foldAngle"]) == len(doc["edges_vertices"]) for fr in doc["file_frames"])
 
 
-def test_export_takes_the_format_from_the_file_name_typed(folded, extension, tmp_path):
+def test_export_takes_the_format_from_the_file_name_typed(folded, extension, tmp_path, capfd):
     """``export_folded(filepath="m1.stl")`` with no format wrote ``m1.glb`` (the default format renamed the file), and
     ``export_pattern_svg(filepath="cp")`` wrote a file without an extension (a designer session's script). A name's
     extension now chooses the format, a format given still wins, and the SVG gets its extension. In the file
@@ -363,8 +363,10 @@ def test_export_takes_the_format_from_the_file_name_typed(folded, extension, tmp
         assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / f"m1{suffix}")) == {"FINISHED"}
         assert (tmp_path / f"m1{suffix}").is_file(), suffix
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m1.fold", "m1.glb", "m1.obj", "m1.stl"]
+    capfd.readouterr()
     assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "m2.stl"), file_format="OBJ") == {"FINISHED"}
     assert (tmp_path / "m2.obj").is_file() and not (tmp_path / "m2.stl").exists()
+    assert "'m2.stl' written as 'm2.obj' (OBJ)" in capfd.readouterr().out  # renamed, and said so
     assert bpy.ops.curved_fold.export_pattern_svg(filepath=str(tmp_path / "cp")) == {"FINISHED"}
     assert (tmp_path / "cp.svg").is_file() and not (tmp_path / "cp").exists()
 

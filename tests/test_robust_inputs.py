@@ -722,24 +722,11 @@ def test_fold_file_not_utf8(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("edges", "assign", "coords", "message"),
     [
-        # a crease drawn on the border: the border is split into pieces (as a drawing's), so the crease overlaps them
-        (
-            [[0, 1], [1, 2], [2, 3], [3, 0], [1, 0]],
-            "BBBBV",
-            None,
-            r"pattern edge 4 \(sq\.fold edge 4\) is not an edge of the triangulation: it overlaps another segment",
-        ),
         (
             [[0, 1], [1, 2], [2, 3], [3, 0], [2, 2]],
             "BBBBV",
             None,
             r"pattern edge 4 \(sq\.fold edge 4\) starts and ends at one vertex",
-        ),
-        (
-            [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2], [2, 0]],
-            "BBBBVV",
-            None,
-            r"pattern edges 4 \(sq\.fold edge 4\) and 5 \(sq\.fold edge 5\) join the same two vertices",
         ),
     ],
 )
@@ -752,6 +739,20 @@ def test_fold_file_geometry_that_cannot_be_meshed(tmp_path: Path, edges, assign,
     pattern = read_pattern(write(tmp_path, "sq.fold", json.dumps(data)))
     with pytest.raises(PatternError, match=r"triangulation: " + message):
         fold_pattern(pattern, angle=90)
+
+
+def test_fold_file_edges_listed_twice_are_kept_once(tmp_path: Path) -> None:
+    """Another tool's FOLD file listing an edge twice (the same valley twice, or a valley on a border edge) was
+    refused ("join the same two vertices", "overlaps another segment") though a drawing's line drawn twice is kept
+    once (a review session): kept once now, by role (border over crease), with a warning."""
+    for edges, assign, said in (
+        ([[0, 1], [1, 2], [2, 3], [3, 0], [0, 2], [2, 0]], "BBBBVV", "1 edge(s) listed twice (first sq.fold edge 4"),
+        ([[0, 1], [1, 2], [2, 3], [3, 0], [1, 0]], "BBBBV", "kept sq.fold edge 0 (B) over sq.fold edge 4 (V)"),
+    ):
+        data = {"vertices_coords": SQUARE_FOLD["vertices_coords"], "edges_vertices": edges}
+        pattern = read_pattern(write(tmp_path, "sq.fold", json.dumps(data | {"edges_assignment": list(assign)})))
+        assert any(said in w for w in pattern.warnings), pattern.warnings
+        assert fold_pattern(pattern, angle=90).result.converged
 
 
 # ----------------------------------------------------------------------------------------------- cannot fold

@@ -776,13 +776,24 @@ def with_crossings_split(pattern: CreasePattern) -> CreasePattern:
         return pattern
     tol = default_parameters(size)[2]
     rec = _split_records(pattern.vertices, pattern.edges, tol, pattern.assignments == "B")
-    if len(rec[0]) == 0:
+    twice = len(np.unique(np.sort(pattern.edges, axis=1), axis=0)) < pattern.n_edges  # an edge listed twice
+    if len(rec[0]) == 0 and not twice:
         return pattern
     a, b = pattern.vertices[pattern.edges[:, 0]], pattern.vertices[pattern.edges[:, 1]]
     pieces = _Pieces(a, b, pattern.edge_polyline, pattern.edge_from_curve, pattern.assignments, pattern.fold_angles)
     warnings: list[str] = []
     verts, edges, attrs = _planar_arrangement(pieces, tol, pattern.sources)
     edges, attrs = _remove_duplicates(edges, attrs, pieces, pattern.sources, warnings)
+    out = _with_edges(pattern, verts, edges, attrs)
+    if len(rec[0]) == 0:  # edges listed twice only: kept once, by role (the drawing's rule)
+        key = np.sort(pattern.edges, axis=1)
+        _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        again = np.flatnonzero(first[inverse.reshape(-1)] != np.arange(pattern.n_edges))
+        k0, k1 = int(first[inverse.reshape(-1)[again[0]]]), int(again[0])
+        named = " and ".join(dict.fromkeys(pattern.sources[k] for k in pattern.edge_polyline[[k0, k1]].tolist()))
+        said = f"{len(again)} edge(s) listed twice (first {named}, between the same two vertices): kept once"
+        out.warnings = [*pattern.warnings, said, *warnings]
+        return out
     split = np.unique(rec[0])
     # the first place and the edges that meet there: both split at a crossing's new point, or one split at the
     # other's end (a T); not the two lowest-numbered edges split anywhere (a review session's warning named two
@@ -799,7 +810,6 @@ def with_crossings_split(pattern: CreasePattern) -> CreasePattern:
         f"{len(split)} edge(s) cross or touch other edges away from a vertex (first {names}, near "
         f"({where[0]:.4g}, {where[1]:.4g}) mm): split there, as a drawing's crossings are"
     )
-    out = _with_edges(pattern, verts, edges, attrs)
     out.warnings = [*pattern.warnings, said, *warnings]
     return out
 

@@ -192,7 +192,11 @@ class VIEW3D_PT_curved_fold_figures(SidebarPanel, bpy.types.Panel):
         rows = (
             ("Faces", f"{props.last_faces}  ({props.last_vertices} vertices)"),
             ("Mesh", f"{props.last_generation_ms:.1f} ms"),
-            ("Solver", f"{props.last_ms:.1f} ms, {props.last_iterations} it." + ("" if props.last_converged else " ⚠")),
+            (
+                "Solver",
+                f"{props.last_ms:.1f} ms ({props.last_cpu_ms:.0f} ms CPU), {props.last_iterations} it."
+                + ("" if props.last_converged else " ⚠"),
+            ),
             ("Strain", f"{props.last_strain_mean:.4f} % mean, {props.last_strain_max:.4f} % max"),
             ("Warp", f"{props.last_warp_mean:.4f}° mean"),
             ("Fold error", f"{props.last_fold_error:.3f}° mean"),

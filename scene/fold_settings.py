@@ -231,6 +231,9 @@ class CURVED_FOLD_PG_mesh(bpy.types.PropertyGroup):
         name="Mesh ms", description="Time spent triangulating (last run)", precision=1, options=set()
     )
     last_ms: FloatProperty(name="Solver ms", description="Time spent solving (last run)", precision=1, options=set())
+    last_cpu_ms: FloatProperty(
+        name="Solver CPU ms", description="CPU time spent solving (last run)", precision=1, options=set()
+    )
     last_iterations: IntProperty(name="Iterations", description="Solver iterations (last run)", options=set())
     last_converged: BoolProperty(
         name="Converged", description="The solver reached equilibrium (last run)", options=set()

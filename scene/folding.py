@@ -228,6 +228,8 @@ def store_figures(ob: bpy.types.Object, out: FoldOutcome) -> None:
     props.last_faces = out.mesh.n_faces
     props.last_generation_ms = float(rep.get("generation_ms", out.mesh.generation_ms) or 0.0)
     props.last_ms = float(rep.get("simulation_ms", 0.0) or 0.0)
+    cpu = rep.get("simulation_cpu_ms")
+    props.last_cpu_ms = float(cpu) if cpu is not None and np.isfinite(cpu) else 0.0
     props.last_iterations = int(rep.get("iterations", 0) or 0)
     props.last_converged = bool(rep.get("converged", False))
     props.last_strain_mean = float(rep["strain_mean_pct"])
@@ -244,7 +246,8 @@ def store_figures(ob: bpy.types.Object, out: FoldOutcome) -> None:
 def figures_text(props) -> str:
     """One line with the last run's figures, for reports."""
     return (
-        f"{props.last_faces} faces, {props.last_ms:.0f} ms, {props.last_iterations} iterations, "
+        f"{props.last_faces} faces, {props.last_ms:.0f} ms ({props.last_cpu_ms:.0f} ms CPU), "
+        f"{props.last_iterations} iterations, "
         f"strain {props.last_strain_mean:.3f} % mean / {props.last_strain_max:.3f} % max, "
         f"warp {props.last_warp_mean:.3f}°" + ("" if props.last_converged else " (not converged)")
     )

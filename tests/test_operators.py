@@ -641,6 +641,7 @@ def test_non_live_curve_edits_show_the_fold_and_bake_out_of_date(folded, extensi
     mesh_notice = "Source curves changed since the fold: Re-fold"
     bake_notice = "Source curves changed since the bake:"
     assert mesh_notice not in panel_texts("VIEW3D_PT_curved_fold_mesh")
+    assert any("ms CPU)" in t for t in panel_texts("VIEW3D_PT_curved_fold_figures"))  # Last Run: CPU beside wall
     assert bake_notice not in panel_texts("VIEW3D_PT_curved_fold_animation")
     flat = np.empty(2 * len(ob.data.vertices), np.float32)
     ob.data.attributes["cf_flat"].data.foreach_get("vector", flat)

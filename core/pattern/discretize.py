@@ -429,7 +429,7 @@ def _candidate_pairs(a: np.ndarray, b: np.ndarray, tol: float) -> tuple[np.ndarr
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
 def _split_records(
@@ -776,8 +776,9 @@ def with_crossings_split(pattern: CreasePattern) -> CreasePattern:
         return pattern
     tol = default_parameters(size)[2]
     rec = _split_records(pattern.vertices, pattern.edges, tol, pattern.assignments == "B")
-    twice = len(np.unique(np.sort(pattern.edges, axis=1), axis=0)) < pattern.n_edges  # an edge listed twice
-    if len(rec[0]) == 0 and not twice:
+    _, first, inverse = np.unique(np.sort(pattern.edges, axis=1), axis=0, return_index=True, return_inverse=True)
+    again = np.flatnonzero(first[inverse.reshape(-1)] != np.arange(pattern.n_edges))  # edges listed a second time
+    if len(rec[0]) == 0 and len(again) == 0:
         return pattern
     a, b = pattern.vertices[pattern.edges[:, 0]], pattern.vertices[pattern.edges[:, 1]]
     pieces = _Pieces(a, b, pattern.edge_polyline, pattern.edge_from_curve, pattern.assignments, pattern.fold_angles)
@@ -786,9 +787,6 @@ def with_crossings_split(pattern: CreasePattern) -> CreasePattern:
     edges, attrs = _remove_duplicates(edges, attrs, pieces, pattern.sources, warnings)
     out = _with_edges(pattern, verts, edges, attrs)
     if len(rec[0]) == 0:  # edges listed twice only: kept once, by role (the drawing's rule)
-        key = np.sort(pattern.edges, axis=1)
-        _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-        again = np.flatnonzero(first[inverse.reshape(-1)] != np.arange(pattern.n_edges))
         k0, k1 = int(first[inverse.reshape(-1)[again[0]]]), int(again[0])
         named = " and ".join(dict.fromkeys(pattern.sources[k] for k in pattern.edge_polyline[[k0, k1]].tolist()))
         said = f"{len(again)} edge(s) listed twice (first {named}, between the same two vertices): kept once"
@@ -1423,7 +1421,7 @@ def _close_open_border(
 ) -> list[CreaseCurve]:
     """Close a border left open at one place: when the border strokes together have exactly two loose ends (ends
     that meet no other border end within ``merge_tolerance``), a straight border stroke joins them, with a warning,
-    unless one of them overshoots (:func:`_pairs_of_gaps`; ``reach``: how near).
+    unless one of them overshoots (:func:`_either_overshoots`; ``reach``: how near).
 
     A rectangle drawn as four points with Cyclic forgotten, or an outline whose last point misses its first by a
     fraction of a millimetre, is what the designer sees as the sheet's outline; left open, the border separated no
@@ -1445,7 +1443,7 @@ def _close_open_border(
     loose = np.flatnonzero(_ends_met(pts, merge_tolerance) % 2 == 0)  # an end met an odd number of times is joined
     if len(loose) != 2 or _on_or_inside_closed_border(pts[loose], curves, SNAP_FACTOR * merge_tolerance).any():
         return curves
-    if not _pairs_of_gaps(curves, ends, pts, loose, merge_tolerance, reach):
+    if _either_overshoots(curves, [ends[int(x)] for x in loose.tolist()], merge_tolerance, reach):
         return curves
     a, b = pts[loose[0]], pts[loose[1]]
     gap = float(np.hypot(*(b - a)))
@@ -1463,21 +1461,12 @@ def _close_open_border(
     return [*curves, closing]
 
 
-MAX_GAP_ENDS = 400
-"""Loose border ends beyond which :func:`_join_border_gaps` pairs none (its distances are all pairs)."""
-
-
-def _pairs_of_gaps(
-    curves: list[CreaseCurve],
-    ends: list[tuple[int, int, np.ndarray]],
-    pts: np.ndarray,
-    loose: np.ndarray,
-    merge_tolerance: float,
-    reach: float,
-) -> list[tuple[int, int]]:
-    """The two ``loose`` border ends (indices into ``ends``/``pts``) as a pair to join, unless one's stroke crosses
-    or touches another border piece within ``reach`` of it: it overshoots (a stroke drawn past its own start, lines
-    past a corner), and its stub is trimmed later (:func:`_trim_border_stubs`)."""
+def _either_overshoots(
+    curves: list[CreaseCurve], ends: list[tuple[int, int, np.ndarray]], merge_tolerance: float, reach: float
+) -> bool:
+    """Whether the stroke of one of the loose border ``ends`` (stroke, side, point) crosses or touches another
+    border piece within ``reach`` of it: it overshoots (a stroke drawn past its own start, lines past a corner), it
+    is no gap to close, and its stub is trimmed later (:func:`_trim_border_stubs`)."""
     pieces = [
         (k, g, seg.evaluate(np.linspace(0.0, 1.0, 33)))
         for k, c in enumerate(curves)
@@ -1485,9 +1474,7 @@ def _pairs_of_gaps(
         for g, seg in enumerate(c.segments)
     ]
     boxes = np.array([[*line.min(axis=0), *line.max(axis=0)] for _, _, line in pieces])
-    if any(_overshoots(curves, ends[int(x)], pieces, boxes, merge_tolerance, reach) for x in loose.tolist()):
-        return []
-    return [(int(loose[0]), int(loose[1]))]
+    return any(_overshoots(curves, end, pieces, boxes, merge_tolerance, reach) for end in ends)
 
 
 def _overshoots(
@@ -1519,13 +1506,10 @@ def _chains_meet(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray, b1: np.ndarray,
     """Whether any segment ``a0[i]–a1[i]`` crosses any ``b0[j]–b1[j]``, or an end of one lies within ``tol`` of
     the other."""
 
-    def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
-
     A0, A1, B0, B1 = a0[:, None], a1[:, None], b0[None], b1[None]
     r, q = A1 - A0, B1 - B0
-    d1, d2 = cross(r, B0 - A0), cross(r, B1 - A0)
-    d3, d4 = cross(q, A0 - B0), cross(q, A1 - B0)
+    d1, d2 = _cross(r, B0 - A0), _cross(r, B1 - A0)
+    d3, d4 = _cross(q, A0 - B0), _cross(q, A1 - B0)
     if np.any((d1 * d2 < 0) & (d3 * d4 < 0)):
         return True
     ends_a = np.concatenate([a0, a1[-1:]])
@@ -1577,11 +1561,10 @@ def _clip_to_border(
     reach = SHORT_OF_BORDER_FRACTION * size
     edges, attrs, past = _trim_border_stubs(verts, edges, attrs, pieces, sources, reach, warnings)
     edges, attrs = _join_border_gaps(verts, edges, attrs, pieces, sources, reach, warnings)
-    assign, edge_poly = pieces.assignment, pieces.polyline
-    is_b = assign[attrs] == "B"
+    edge_poly = pieces.polyline
+    is_b, deg = _border_degree(len(verts), edges, attrs, pieces)
     if not is_b.any():
         return verts, edges, attrs
-    deg = np.bincount(edges[is_b].ravel(), minlength=len(verts))
     crossing = np.flatnonzero((deg >= 4) & (deg % 2 == 0))
     if len(crossing):
         # four or more border pieces at one point: the outline crosses or touches itself, so which side is
@@ -1613,6 +1596,16 @@ def _clip_to_border(
     return _snap_short_ends(verts, edges, attrs, pieces, sources, size, merge_tolerance, warnings)
 
 
+def _border_degree(n: int, edges: np.ndarray, attrs: np.ndarray, pieces: _Pieces) -> tuple[np.ndarray, np.ndarray]:
+    """Which ``edges`` are border pieces (bool per edge), and how many of them meet at each of the ``n`` vertices."""
+    is_b = pieces.assignment[attrs] == "B"
+    return is_b, np.bincount(edges[is_b].ravel(), minlength=n)
+
+
+MAX_GAP_ENDS = 400
+"""Loose border ends beyond which :func:`_join_border_gaps` pairs none (its distances are all pairs)."""
+
+
 def _join_border_gaps(
     verts: np.ndarray,
     edges: np.ndarray,
@@ -1629,9 +1622,8 @@ def _join_border_gaps(
     its corners were trimmed: the slits of a kirigami lattice, and the paper bridges between them, stay as drawn
     (joined before the clean-up, a review session's lattice fell apart). A square drawn as four lines 0.1 mm apart
     at two corners folded nothing ("converged" in 0 iterations), at four "no paper left" (a designer session)."""
-    is_b = pieces.assignment[attrs] == "B"
+    is_b, deg = _border_degree(len(verts), edges, attrs, pieces)
     b_idx = np.flatnonzero(is_b)
-    deg = np.bincount(edges[b_idx].ravel(), minlength=len(verts))
     loose = np.flatnonzero(deg == 1)
     if len(loose) < 2 or len(loose) > MAX_GAP_ENDS:
         return edges, attrs
@@ -1690,11 +1682,10 @@ def _trim_border_stubs(
     refused ("the border crosses or touches itself"), where a crease drawn past the border is trimmed. Also
     returns, for a longer stub (up to ten times that), the clause the refusal of the self-crossing border it leaves
     adds ("" if none): it said to draw one loop, not that the lines overshoot."""
-    is_b = pieces.assignment[attrs] == "B"
+    is_b, deg = _border_degree(len(verts), edges, attrs, pieces)
     if not is_b.any():
         return edges, attrs, ""
     b_idx = np.flatnonzero(is_b)
-    deg = np.bincount(edges[b_idx].ravel(), minlength=len(verts))
     incident: dict[int, list[int]] = {}
     for k in b_idx.tolist():
         for v in edges[k].tolist():

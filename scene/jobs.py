@@ -137,10 +137,7 @@ class PositionsPreview:
                 sp.points.foreach_get("co", co)
                 pts.append(co)
             self.children[name] = pts
-        self.frame = {  # copies: an ID property array read from the object is a view of it
-            key: None if ob.get(key) is None else [float(x) for x in ob.get(key)]
-            for key in (mesh_object.OFFSET_KEY, mesh_object.PROBE_KEY)
-        }
+        self.origin = mesh_object.origin_state(ob)
         self.shown = False
 
     @property
@@ -175,11 +172,7 @@ class PositionsPreview:
             for sp, co in zip(child.data.splines, self.children.get(name, ()), strict=False):
                 sp.points.foreach_set("co", co)
             child.data.update_tag()
-        for key, value in self.frame.items():  # the origin offset and probe as they were (the previews wrote them)
-            if value is None:
-                ob.pop(key, None)
-            else:
-                ob[key] = value
+        mesh_object.restore_origin_state(ob, self.origin)  # the previews recorded their writes
         self.shown = False
 
 

@@ -340,7 +340,7 @@ def replace_fold_mesh(
     me = _new_mesh_data(mesh, positions, old.name, scene, offset)
     for mat in old.materials:
         me.materials.append(mat)
-    kept = {key: ob.get(key) and [float(x) for x in ob[key]] for key in (OFFSET_KEY, PROBE_KEY)}
+    kept = origin_state(ob)
     ob.data = me
     remember_local(ob, offset)
     try:
@@ -349,11 +349,7 @@ def replace_fold_mesh(
         write_results(ob, mesh, positions, scene=scene, **results)
     except Exception:
         ob.data = old
-        for key, value in kept.items():
-            if value is None:
-                ob.pop(key, None)
-            else:
-                ob[key] = value
+        restore_origin_state(ob, kept)
         bpy.data.meshes.remove(me)
         raise
     name = old.name
@@ -482,21 +478,40 @@ def remember_local(ob: bpy.types.Object, offset: np.ndarray, co: np.ndarray | No
     ob[PROBE_KEY] = co[_probe_indices(len(co))].ravel().tolist()
 
 
+def origin_state(ob: bpy.types.Object) -> dict[str, list[float] | None]:
+    """``ob``'s origin offset and probe as they are (copies: an ID property array read from the object is a view of
+    it), for :func:`restore_origin_state` after a write that is undone (a preview, a failed mesh swap)."""
+    return {key: None if ob.get(key) is None else [float(x) for x in ob[key]] for key in (OFFSET_KEY, PROBE_KEY)}
+
+
+def restore_origin_state(ob: bpy.types.Object, state: dict[str, list[float] | None]) -> None:
+    """Put back what :func:`origin_state` took."""
+    for key, value in state.items():
+        if value is None:
+            ob.pop(key, None)
+        else:
+            ob[key] = value
+
+
 def engine_positions(ob: bpy.types.Object, scene: bpy.types.Scene | None = None) -> np.ndarray:
     """``ob``'s vertex positions in the engine's frame (``(n, 3)`` mm): as stored, less the origin offset."""
     offset = local_offset(ob)
     return (local_coordinates(ob) - offset) * mm_per_unit(scene)
 
 
-def update_positions(ob: bpy.types.Object, positions: np.ndarray, *, scene: bpy.types.Scene | None = None) -> None:
+def update_positions(
+    ob: bpy.types.Object, positions: np.ndarray, *, scene: bpy.types.Scene | None = None
+) -> np.ndarray:
     """Move ``ob``'s vertices to ``positions`` (``(n, 3)`` mm); writes the Basis key when the mesh has shape keys.
+    Returns where the vertices go (object space, float64, before the float32 rounding of the write).
 
     Uses the fast float32 ``foreach_set`` paths (``attributes['position']`` / ``key.points``). The crease-curve
     children follow.
     """
     me = ob.data
     origin = local_offset(ob)
-    co = (np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene) + origin).astype(np.float32)
+    local = np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene) + origin
+    co = local.astype(np.float32)
     if len(co) != len(me.vertices):
         raise ValueError(f"object '{ob.name}' has {len(me.vertices)} vertices, got {len(co)} positions")
     if me.shape_keys is not None:
@@ -514,6 +529,7 @@ def update_positions(ob: bpy.types.Object, positions: np.ndarray, *, scene: bpy.
             offset += k
         child.data.update_tag()
     remember_local(ob, origin, co)
+    return local
 
 
 def write_results(
@@ -532,7 +548,7 @@ def write_results(
     or per vertex (degrees); missing ones are left as they were.
     """
     me = ob.data
-    update_positions(ob, positions, scene=scene)
+    co = update_positions(ob, positions, scene=scene)  # object space, its origin's offset in
     if fold_angles_sim is not None:
         perm = blender_edge_order(me, mesh)
         sim = np.asarray(fold_angles_sim, dtype=np.float32)[perm]
@@ -548,7 +564,6 @@ def write_results(
         write_colours(me, "cf_warp", w, WARP_CLIP_DEG)
     if me.color_attributes.get("cf_strain") is not None and me.color_attributes.active_color is None:
         me.color_attributes.active_color = me.color_attributes["cf_strain"]
-    co = np.asarray(positions, dtype=np.float64).reshape(-1, 3) / mm_per_unit(scene) + local_offset(ob)
     if ob.get("cf_no_creases"):
         return
     if not _crease_curve_objects(ob) or ob.get("cf_crease_topology") != _topology_key(mesh):

@@ -463,12 +463,6 @@ def create_fold(out: FoldOutcome, sources, coll_name, options: FoldOptions, targ
     return ob
 
 
-def current_positions(ob: bpy.types.Object, scene=None) -> np.ndarray:
-    """The fold object's vertex positions (mm, the engine's frame) as stored (the ``position`` attribute, i.e. the
-    Basis), less any move of its origin (``mesh_object.engine_positions``)."""
-    return mesh_object.engine_positions(ob, scene)
-
-
 def same_mesh(a: FoldMesh, b: FoldMesh) -> bool:
     """Whether two fold meshes are the same pattern mesh (flat vertices, triangles, crease targets), up to the
     float32 rounding of a mesh stored on an object (1e-7 of the sheet's size, 1e-4° of a target)."""
@@ -518,10 +512,8 @@ def refold_job(
     handle = jobs.ObjectHandle(ob)
     sources_fingerprint = source_state.fingerprint(sources, scene) if rebuild else None  # as this job reads them
     stored = mesh_object.read_fold_mesh(ob)
-    start = current_positions(ob, scene) if warm_start else None
     held = pins.constraints_from_object(ob, stored, scene)  # pins hold vertices where they are: start from the
-    if held is not None and start is None:  # shape shown
-        start = pins.current_positions(ob, scene)
+    start = pins.current_positions(ob, scene) if warm_start or held is not None else None  # shape shown
     pct = props.fold_percent / 100.0
     method = props.solver
     angle = override_angle_degrees(props)

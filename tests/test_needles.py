@@ -10,6 +10,7 @@ valley: not converged in 500 iterations, residual 1.6).
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -254,6 +255,22 @@ def test_no_split_when_the_segment_budget_is_spent(sine, monkeypatch) -> None:
     split, _ = split_needle_creases(sine)
     assert split.n_edges == sine.n_edges
     assert any("were not split: the pattern already has 229 segments (limit 229)" in w for w in split.warnings)
+
+
+def test_the_budget_warnings_name_cuts_as_cuts(sine, monkeypatch) -> None:
+    """Straight cuts beside needles are split as creases are; the budget's warnings count them as cuts."""
+    import curved_fold.core.mesh.needles as needles
+
+    straight = np.flatnonzero(~sine.edge_from_curve & (sine.assignments != "B"))
+    assignments = sine.assignments.copy()
+    assignments[straight[::2]] = "C"
+    cut = replace(sine, assignments=assignments)
+    monkeypatch.setattr(needles, "MAX_SEGMENTS", cut.n_edges)
+    [note] = [w for w in split_needle_creases(cut)[0].warnings if "were not split" in w]
+    assert re.match(r"meshing: \d+ straight crease\(s\) and \d+ straight cut\(s\) beside needles were not", note)
+    monkeypatch.setattr(needles, "MAX_SEGMENTS", cut.n_edges + 120)
+    [note] = [w for w in split_needle_creases(cut)[0].warnings if "would make more than" in w]
+    assert re.match(r"meshing: splitting \d+ straight crease\(s\) and \d+ straight cut\(s\) beside needles", note)
 
 
 def test_a_fold_file_keeps_the_interval_its_creases_were_split_at(sine, tmp_path: Path) -> None:

@@ -170,6 +170,15 @@ def split_needle_creases_steps(
     return pattern, pt
 
 
+def _lines(pattern: CreasePattern, which: np.ndarray) -> str:
+    """The lines ``which`` selects, counted as a warning names them: "3 straight crease(s)", "2 straight cut(s)",
+    or both: a cut is split beside needles as a crease is, and the warnings called every one a crease."""
+    cuts = int(np.count_nonzero(np.asarray(pattern.assignments)[which] == "C"))
+    creases = int(np.count_nonzero(which)) - cuts
+    named = [f"{n} straight {kind}(s)" for n, kind in ((creases, "crease"), (cuts, "cut")) if n]
+    return " and ".join(named)
+
+
 def _within_budget(pattern: CreasePattern, which: np.ndarray, interval: float) -> tuple[float, str]:
     """The interval to split ``which`` at, and a warning (or ""): ``interval``, or larger where its pieces would take
     the pattern past the discretisation's :data:`~..pattern.discretize.MAX_SEGMENTS` (150 pleats 2 mm apart on a
@@ -182,7 +191,7 @@ def _within_budget(pattern: CreasePattern, which: np.ndarray, interval: float) -
         return interval, ""
     if room <= len(e):
         return math.inf, (
-            f"meshing: {len(e)} straight crease(s) beside needles were not split: the pattern already has "
+            f"meshing: {_lines(pattern, which)} beside needles were not split: the pattern already has "
             f"{pattern.n_edges} segments (limit {MAX_SEGMENTS})"
         )
     lo, hi = interval, float(length.max())  # too many pieces at lo, one piece each (≤ room) at hi
@@ -190,6 +199,6 @@ def _within_budget(pattern: CreasePattern, which: np.ndarray, interval: float) -
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if float(np.ceil(length / mid).sum()) > room else (lo, mid)
     return hi, (
-        f"meshing: splitting {len(e)} straight crease(s) beside needles at the interval {interval:g} mm would make "
+        f"meshing: splitting {_lines(pattern, which)} beside needles at the interval {interval:g} mm would make "
         f"more than {MAX_SEGMENTS} segments; split at {hi:.4g} mm"
     )

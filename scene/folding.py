@@ -401,7 +401,7 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
     if not sources:
         raise PatternError("no crease curves selected: select curve objects that have a crease role")
     target = sources[0].users_collection[0] if sources[0].users_collection else bpy.context.scene.collection
-    name = new_fold_name(sources, coll)
+    name = jobs.free_owner(new_fold_name(sources, coll))
     source_handles = [jobs.ObjectHandle(s) for s in sources]
     coll_name = coll.name if coll is not None else None
     sources_fingerprint = source_state.fingerprint(sources, scene)  # the curves as this job reads them

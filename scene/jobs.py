@@ -279,6 +279,8 @@ class Job:
         the Hessian's structure, "solve" a solver iteration, "figures" the self-intersection test or the report)."""
         self.started = time.perf_counter()
         self.elapsed_ms = 0.0
+        self.shown: np.ndarray | None = None
+        """The positions the preview shows (mm), to show again after a save (:func:`hide_previews`)."""
 
     @property
     def running(self) -> bool:
@@ -297,6 +299,17 @@ def running_job(owner: str) -> Job | None:
     """The job running on ``owner`` (a fold object's name), if any."""
     job = _jobs.get(owner)
     return job if job is not None and job.running else None
+
+
+def free_owner(name: str) -> str:
+    """An owner for a job that makes a new object called ``name``: ``name`` itself, or the first ``name.001``,
+    ``name.002`` … that no object has and no job owns (Blender numbers the new object so when the name is taken).
+    Owned by the existing object's name, a Fold of curves whose earlier fold was baking was refused as "busy"."""
+    candidate, k = name, 0
+    while candidate in bpy.data.objects or candidate in _jobs:
+        k += 1
+        candidate = f"{name}.{k:03d}"
+    return candidate
 
 
 def start(job: Job) -> Job:
@@ -361,6 +374,7 @@ def run_slice(job: Job, budget_ms: float | None = None) -> bool:
         if commit is None:
             if shown is not None and job.preview is not None:
                 job.preview.show(shown)
+                job.shown = shown
         else:
             if job.preview is not None:
                 job.preview.restore()
@@ -398,6 +412,23 @@ def run_to_end(job: Job) -> Any:
     while not run_slice(job, math.inf):
         pass
     return job.result
+
+
+def hide_previews() -> None:
+    """Before a save: every running job's preview restored, so the file holds the scene as it was before the job
+    (:func:`show_previews` puts the previews back after it). Saved with a bake running, the file held its muted
+    keys and a partial frame; saved during a rebuild, the object pointed at the temporary mesh and the bake's keys
+    were not in the file (a designer session's Ctrl+S)."""
+    for job in _jobs.values():
+        if job.running and job.preview is not None:
+            job.preview.restore()
+
+
+def show_previews() -> None:
+    """After a save: the running jobs' previews shown again where they were (:func:`hide_previews`)."""
+    for job in _jobs.values():
+        if job.running and job.preview is not None and job.shown is not None:
+            job.preview.show(job.shown)
 
 
 def cancel_all() -> None:

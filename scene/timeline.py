@@ -320,7 +320,20 @@ def on_undo(*_args) -> None:
     jobs.cancel_all()
 
 
+@persistent
+def on_save_pre(*_args) -> None:
+    """A save is about to write the file: the running jobs' previews come off first (:func:`jobs.hide_previews`)."""
+    jobs.hide_previews()
+
+
+@persistent
+def on_save_post(*_args) -> None:
+    """The file is written: the running jobs' previews go back on, and the jobs go on."""
+    jobs.show_previews()
+
+
 UNDO_HANDLERS = ("undo_pre", "redo_pre")
+SAVE_HANDLERS = (("save_pre", on_save_pre), ("save_post", on_save_post))
 
 
 def register_extra() -> None:
@@ -328,6 +341,8 @@ def register_extra() -> None:
     app_handlers.attach(bpy.app.handlers.load_pre, on_load)
     for name in UNDO_HANDLERS:
         app_handlers.attach(getattr(bpy.app.handlers, name), on_undo)
+    for name, function in SAVE_HANDLERS:
+        app_handlers.attach(getattr(bpy.app.handlers, name), function)
 
 
 def unregister_extra() -> None:
@@ -335,5 +350,7 @@ def unregister_extra() -> None:
     app_handlers.detach(bpy.app.handlers.load_pre, on_load)
     for name in UNDO_HANDLERS:
         app_handlers.detach(getattr(bpy.app.handlers, name), on_undo)
+    for name, function in SAVE_HANDLERS:
+        app_handlers.detach(getattr(bpy.app.handlers, name), function)
     jobs.cancel_all()
     _caches.clear()

@@ -241,8 +241,7 @@ def curve_parameters(
     at_cusp = np.array(cusps)
     for _ in range(64):
         tm = 0.5 * (t[:-1] + t[1:])
-        dist = point_segment_distance(seg.evaluate(tm), p[:-1], p[1:])
-        bad = dist > tolerance
+        bad = _strays(seg, t, p, tolerance)
         if not bad.any() or len(t) + int(bad.sum()) > budget + 1:
             break
         # a chord is split at its parameter midpoint, or from a cusp at 1/√2 of its parameter span: the curve
@@ -254,6 +253,23 @@ def curve_parameters(
         t = np.concatenate([t, ti[bad]])[order]
         p = np.concatenate([p, seg.evaluate(ti[bad])])[order]
     return t
+
+
+STRAY_PROBES = (0.25, 0.5, 0.75)
+"""Where along each chord's parameter span the curve's distance from the chord is measured. At the middle alone, a
+chord across an inflection looked exact: a symmetric S-curve passes through its chord's midpoint, and a lamp-shade
+strip's S-shaped creases (2.3 mm from their chords, the tolerance 0.47 mm) were each kept as one straight chord,
+so the strip folded as a flat zigzag (a designer session)."""
+
+
+def _strays(seg: CurveSegment, t: np.ndarray, p: np.ndarray, tolerance: float) -> np.ndarray:
+    """Which chords ``p[k] → p[k+1]`` (the curve at ``t``) the curve strays from by more than ``tolerance`` at any of
+    :data:`STRAY_PROBES`."""
+    span = np.diff(t)
+    bad = np.zeros(len(span), dtype=bool)
+    for f in STRAY_PROBES:
+        bad |= point_segment_distance(seg.evaluate(t[:-1] + f * span), p[:-1], p[1:]) > tolerance
+    return bad
 
 
 def _equal_steps(seg: CurveSegment, interval: float, budget: int) -> np.ndarray:

@@ -122,6 +122,10 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
         return False
 
     def execute(self, context):
+        with _common.object_mode(context):
+            return self._export(context)
+
+    def _export(self, context):
         ob = context.active_object
         asked = self.filepath
         typed = _FORMAT_OF.get(Path(self.filepath).suffix.lower())
@@ -205,7 +209,9 @@ class CURVED_FOLD_OT_export_pattern_svg(bpy.types.Operator, ExportHelper):
             self.filepath += ".svg"
         try:
             layout = "cutter" if self.layout == "CUTTER" else "origami-simulator"
-            path = export.write_pattern_svg(self.filepath, mesh_object.read_fold_mesh(ob), layout=layout)
+            with _common.object_mode(context):
+                mesh = mesh_object.read_fold_mesh(ob)
+            path = export.write_pattern_svg(self.filepath, mesh, layout=layout)
         except (*folding.engine_errors(), OSError) as exc:
             self.report({"ERROR"}, f"SVG export of '{ob.name}' failed: {exc}")
             return {"CANCELLED"}

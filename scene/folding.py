@@ -566,6 +566,9 @@ class _Previews:
     def restore(self):
         self.active.restore()
 
+    def edited(self):
+        return self.active.edited()
+
 
 def write_refold(
     ob: bpy.types.Object,

@@ -144,6 +144,10 @@ class PositionsPreview:
     def ob(self) -> bpy.types.Object | None:
         return self.handle.get()
 
+    def edited(self) -> bpy.types.Object | None:
+        """The object whose mesh this preview changes (None if gone)."""
+        return self.ob
+
     def show(self, positions_mm: np.ndarray) -> None:
         ob = self.ob
         if ob is None or len(positions_mm) != self.n:
@@ -201,6 +205,12 @@ class MeshPreview:
         self.tmp: ObjectHandle | None = None
         self.old_me_name: str | None = None
         self.offset = np.zeros(3)  # BU: the object's origin offset (mesh_object.local_offset), for a rebuild
+
+    def edited(self) -> bpy.types.Object | None:
+        """The object whose mesh this preview changes: the rebuilt object, or the temporary one (None if none)."""
+        if self.handle is not None:
+            return self.handle.get()
+        return self.tmp.get() if self.tmp is not None else None
 
     def set_mesh(self, mesh) -> None:
         """The FoldMesh the following :meth:`show` calls move (made once the pattern is meshed)."""
@@ -324,6 +334,45 @@ def start(job: Job) -> Job:
     return job
 
 
+class EditModeError(RuntimeError):
+    """The object a job previews on was put in Edit Mode: the job stops (one line for the user)."""
+
+
+def _leave_edit_mode(ob: bpy.types.Object) -> None:
+    """Take ``ob`` out of Edit Mode (writing its edit mesh back, as Tab does), the active object kept."""
+    view_layer = bpy.context.view_layer
+    active = view_layer.objects.active
+    view_layer.objects.active = ob
+    try:
+        bpy.ops.object.mode_set(mode="OBJECT")
+    finally:
+        if active is not None and active != ob and bpy.data.objects.get(active.name) is active:
+            view_layer.objects.active = active
+
+
+def _restore(job: Job) -> bool:
+    """Restore ``job``'s preview, leaving Edit Mode first if its object was put there (in Edit Mode the mesh's
+    arrays are empty and the restore failed: a Bake under Tab stayed "busy" for good). Returns whether it did."""
+    if job.preview is None:
+        return False
+    ob = job.preview.edited()
+    edited = ob is not None and ob.mode == "EDIT"
+    if edited:
+        _leave_edit_mode(ob)
+    job.preview.restore()
+    return edited
+
+
+def _check_not_edited(job: Job) -> None:
+    """Raise :class:`EditModeError` if the object ``job`` previews on is in Edit Mode (its next write would be lost,
+    or fail)."""
+    ob = job.preview.edited() if job.preview is not None else None
+    if ob is not None and ob.mode == "EDIT":
+        raise EditModeError(
+            f"'{ob.name}' was put in Edit Mode while {job.kind}: stopped; it is back in Object Mode as it was"
+        )
+
+
 def _end(job: Job, state: str) -> None:
     job.state = state
     job.elapsed_ms = 1e3 * (time.perf_counter() - job.started)
@@ -346,6 +395,7 @@ def run_slice(job: Job, budget_ms: float | None = None) -> bool:
     commit = job.pending_commit
     ran = 0
     try:
+        _check_not_edited(job)
         while commit is None:
             tu = time.perf_counter()
             try:
@@ -380,8 +430,10 @@ def run_slice(job: Job, budget_ms: float | None = None) -> bool:
                 job.preview.restore()
             job.result = commit() if callable(commit) else commit
     except BaseException as exc:
-        if job.preview is not None:
-            job.preview.restore()
+        try:
+            _restore(job)
+        except Exception as failed:  # noqa: BLE001 - the scene changed under the preview too: the job still ends
+            exc.add_note(f"restoring the preview failed: {type(failed).__name__}: {failed}")
         job.error = exc
         job.steps.close()
         _end(job, "failed")
@@ -402,9 +454,10 @@ def cancel(job: Job) -> None:
     if not job.running:
         return
     job.steps.close()
-    if job.preview is not None:
-        job.preview.restore()
-    _end(job, "cancelled")
+    try:
+        _restore(job)
+    finally:
+        _end(job, "cancelled")
 
 
 def run_to_end(job: Job) -> Any:
@@ -418,10 +471,13 @@ def hide_previews() -> None:
     """Before a save: every running job's preview restored, so the file holds the scene as it was before the job
     (:func:`show_previews` puts the previews back after it). Saved with a bake running, the file held its muted
     keys and a partial frame; saved during a rebuild, the object pointed at the temporary mesh and the bake's keys
-    were not in the file (a designer session's Ctrl+S)."""
-    for job in _jobs.values():
+    were not in the file (a designer session's Ctrl+S). A job whose object is in Edit Mode is stopped: the restore
+    takes it out of Edit Mode (:func:`_restore`), and its preview could not be shown again there."""
+    for job in list(_jobs.values()):
         if job.running and job.preview is not None:
-            job.preview.restore()
+            if _restore(job):  # its object was in Edit Mode, and is no longer: the job cannot go on
+                job.steps.close()
+                _end(job, "cancelled")
 
 
 def show_previews() -> None:

@@ -263,10 +263,12 @@ def percent_at(ob: bpy.types.Object, frame: float) -> float:
 
 
 def driven(ob: bpy.types.Object) -> bool:
-    """Whether a frame change should fold ``ob``: a fold object with keyframed settings, not showing a current bake
-    (an out-of-date one is muted), no job running on it, quasi-static."""
+    """Whether a frame change should fold ``ob``: a fold object with keyframed settings, not in Edit Mode, not showing
+    a current bake (an out-of-date one is muted), no job running on it, quasi-static."""
     props = getattr(ob, "curved_fold_mesh", None)
     if props is None or not props.is_fold_mesh or ob.type != "MESH" or not animated(ob):
+        return False
+    if ob.mode == "EDIT":  # being edited: its vertices are the user's until Edit Mode is left (a traceback per frame)
         return False
     if props.solver_mode == "DYNAMIC" or jobs.running_job(ob.name) is not None:
         return False

@@ -552,18 +552,31 @@ def test_undo_stops_running_jobs_first(folded, extension):
     assert job.state == "cancelled" and exact_state() == before
 
 
+def _baked_three_frames(extension):
+    """The jobs, folding and bake modules and the scene, the active fold baked over frames 1–3."""
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 3
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    return mod(extension, "scene.jobs"), mod(extension, "scene.folding"), mod(extension, "scene.bake"), scene
+
+
+def _bake_shown(jobs, steps):
+    """A bake job started and run one unit per slice until its preview shows a frame."""
+    job = jobs.start(steps)
+    for _ in range(200):
+        if job.shown is not None:
+            return job
+        assert not jobs.run_slice(job, budget_ms=0.0)
+    raise AssertionError("the bake showed no frame")
+
+
 def test_a_save_while_jobs_run_writes_the_scene_as_it_was(folded, extension, tmp_path):
     """Saved while a bake, a rebuild or a new fold runs, the file holds the scene as it was before them (the
     previews come off for the save and go back on after it, and the jobs go on). A designer session's Ctrl+S
     mid-rebuild saved the object pointing at the temporary mesh, and the bake's keys were lost on reopening;
     mid-bake the file held muted keys and a partial frame; mid-fold a stray half-folded mesh."""
     ob, border, crease = folded
-    jobs = mod(extension, "scene.jobs")
-    folding = mod(extension, "scene.folding")
-    bake = mod(extension, "scene.bake")
-    scene = bpy.context.scene
-    scene.frame_start, scene.frame_end = 1, 3
-    assert bpy.ops.curved_fold.bake() == {"FINISHED"}
+    jobs, folding, bake, scene = _baked_three_frames(extension)
     crease.data.splines[0].bezier_points[1].handle_left = (0.08, 0.03, 0)
     bpy.context.view_layer.update()
     edited = exact_state()
@@ -587,15 +600,70 @@ def test_a_save_while_jobs_run_writes_the_scene_as_it_was(folded, extension, tmp
     # a bake saved mid-way: the file has the last bake's keys unmuted and the positions as they were
     ob = bpy.data.objects["Border Folded"]
     state = exact_state()
-    job = jobs.start(bake.bake_job(ob, [1, 2, 3], scene=bpy.context.scene))
-    for _ in range(200):
-        if job.shown is not None:
-            break
-        assert not jobs.run_slice(job, budget_ms=0.0)
-    assert job.shown is not None
+    job = _bake_shown(jobs, bake.bake_job(ob, [1, 2, 3], scene=bpy.context.scene))
     assert bpy.ops.wm.save_as_mainfile(filepath=path, copy=True) == {"FINISHED"}
     assert job.running
     jobs.cancel(job)
     assert exact_state() == state
     assert bpy.ops.wm.open_mainfile(filepath=path) == {"FINISHED"}
     assert exact_state() == state
+
+
+def _edit(ob) -> None:
+    bpy.context.view_layer.objects.active = ob
+    assert bpy.ops.object.mode_set(mode="EDIT") == {"FINISHED"} and ob.mode == "EDIT"
+
+
+def test_edit_mode_during_a_job_stops_it_and_leaves_the_object_as_it_was(folded, extension):
+    """Tab into Edit Mode while a Bake ran: the next slice failed on the edit mesh ("the scene changed while it ran
+    (KeyError: 'position')"), so did the preview's restore inside the error path, the job was never ended and every
+    later Bake or Re-fold said the object was busy (a designer session). Now the job stops with one line, the object
+    is taken out of Edit Mode and restored byte for byte, and is free for the next job; the same for a rebuild's
+    preview mesh and for Esc pressed in Edit Mode."""
+    ob, _, crease = folded
+    jobs, folding, bake, scene = _baked_three_frames(extension)
+    before = exact_state()
+    job = _bake_shown(jobs, bake.bake_job(ob, [1, 2, 3], scene=scene))
+    _edit(ob)
+    with pytest.raises(jobs.EditModeError, match="'Border Folded' was put in Edit Mode while baking: stopped"):
+        jobs.run_slice(job)
+    assert job.state == "failed" and ob.mode == "OBJECT" and jobs.running_job(ob.name) is None
+    assert exact_state() == before
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"}  # not "busy"
+    # saved while in Edit Mode: the save takes the preview off, and the job cannot go on
+    before = exact_state()
+    job = _bake_shown(jobs, bake.bake_job(ob, [1, 2, 3], scene=scene))
+    _edit(ob)
+    mod(extension, "scene.timeline").on_save_pre()
+    assert job.state == "cancelled" and ob.mode == "OBJECT" and exact_state() == before
+    # a rebuild shows a preview mesh on the object: Esc pressed in Edit Mode gives the object its own mesh back
+    crease.data.splines[0].bezier_points[1].handle_left = (0.08, 0.03, 0)
+    bpy.context.view_layer.update()
+    before = exact_state()
+    job = jobs.start(folding.refold_job(ob, rebuild=True, warm_start=True))
+    run_slices_until(jobs, job, "solve", then=1)
+    _edit(ob)
+    jobs.cancel(job)
+    assert job.state == "cancelled" and ob.mode == "OBJECT" and exact_state() == before
+
+
+def test_exports_and_frame_changes_work_on_a_fold_in_edit_mode(folded, extension, tmp_path):
+    """In Edit Mode a mesh's arrays are empty: Export Mesh and Export SVG ended in a Python traceback, and every frame
+    change of a keyframed fold printed one from its handler (a designer session). Exports now read the edit mesh, as
+    Blender's own exporters do, and a fold being edited is not folded by frame changes."""
+    ob, _, _ = folded
+    timeline = mod(extension, "scene.timeline")
+    keyframe_percent(ob, {1: 10.0, 9: 90.0})
+    bpy.context.scene.frame_set(5)
+    _edit(ob)
+    for suffix in (".glb", ".fold", ".obj"):
+        assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / f"e{suffix}")) == {"FINISHED"}, suffix
+        assert (tmp_path / f"e{suffix}").stat().st_size > 0
+    assert bpy.ops.curved_fold.export_pattern_svg(filepath=str(tmp_path / "e.svg")) == {"FINISHED"}
+    assert ob.mode == "EDIT"  # back where the user was
+    for kind in ("STRAIN", "WARP", "CROSSING", "NONE"):
+        assert bpy.ops.curved_fold.show_colours(kind=kind) == {"FINISHED"}, kind
+    assert not timeline.driven(ob)
+    bpy.context.scene.frame_set(8)  # no traceback from the handler; the edit mesh is the user's
+    assert bpy.ops.object.mode_set(mode="OBJECT") == {"FINISHED"}
+    assert timeline.driven(ob)

@@ -271,6 +271,45 @@ def test_a_crease_that_stops_just_short_of_the_border_is_drawn_onto_it() -> None
         assert report["converged"] and not report["does_not_fold_as_assigned"], report["warnings"]
 
 
+def test_creases_drawn_onto_a_curved_hole_are_not_said_to_stop_short() -> None:
+    """A designer's radial creases drawn exactly onto a round hole (150 mm sheet, r = 10) end on the circle, up to
+    the tolerance off its chords: at a 5 mm interval they were moved onto the chord with a warning to "draw creases
+    to the border" (0.06 mm), which came and went with the interval. They join the hole silently now; a crease
+    0.5 mm short of it still warns."""
+    sheet = '<path id="border" d="M0 0 L150 0 L150 150 L0 150 Z" stroke="#000000" fill="none"/>'
+    hole = '<circle id="hole" cx="75" cy="75" r="10" stroke="#000000" fill="none"/>'
+    rays = [
+        ("84.8007,76.9867", "112.5749,88.7159 150,90.2033"),
+        ("80.5253,83.3349", "91.8709,111.2681 124.7183,150"),
+        ("73.0133,84.8007", "61.2841,112.5749 59.7967,150"),
+        ("66.6651,80.5253", "38.7319,91.8709 0,124.7183"),
+        ("65.1993,73.0133", "37.4251,61.2841 0,59.7967"),
+        ("69.4747,66.6651", "58.1291,38.7319 25.2817,0"),
+        ("76.9867,65.1993", "88.7159,37.4251 90.2033,0"),
+        ("83.3349,69.4747", "111.2681,58.1291 150,25.2817"),
+    ]
+
+    def drawing(first: str) -> str:
+        starts = [first] + [a for a, _ in rays[1:]]
+        return (
+            sheet
+            + hole
+            + "".join(
+                f'<path id="r{k}" d="M{a} Q{q}" stroke="{"#f00" if k % 2 else "#00f"}" stroke-opacity="0.5"/>'
+                for k, (a, (_, q)) in enumerate(zip(starts, rays, strict=True))
+            )
+        )
+
+    for interval in (3.0, 5.0, 8.0):
+        p = pattern_of(drawing(rays[0][0]), interval=interval)
+        assert not any("short of the border" in w for w in p.warnings), (interval, p.warnings)
+        creases, border = p.edges[np.isin(p.assignments, ("M", "V"))], p.edges[p.assignments == "B"]
+        ends = np.flatnonzero(np.bincount(creases.ravel(), minlength=len(p.vertices)) == 1)
+        assert len(ends) == 16 and np.isin(ends, border).all()  # each ray from the hole to the outer border
+    p = pattern_of(drawing("85.2907,77.0860"), interval=5.0)  # the first ray starts 0.5 mm off the circle
+    assert any(w.startswith("1 crease end(s) stopped short of the border") for w in p.warnings), p.warnings
+
+
 def test_a_crease_that_just_misses_another_is_joined_to_it() -> None:
     """Drawn with snapping off (a helper's cases, 100 mm sheet, reach 1 mm): a branch that stops 0.3 mm short of the
     crease ahead of it is joined to it, and one drawn 0.3 mm past it loses the stub, each with a warning naming it;

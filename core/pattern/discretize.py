@@ -1568,11 +1568,12 @@ def _clip_to_border(
     pieces: _Pieces,
     sources: list[str],
     size: float,
-    merge_tolerance: float,
+    tolerances: tuple[float, float],
     warnings: list[str],
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Step 4: refuse a self-crossing border, warn about an open one, remove crease pieces outside a closed one and
-    move crease ends just short of it onto it (:func:`_snap_short_ends`; ``size``: the sheet's)."""
+    move crease ends just short of it onto it (:func:`_snap_short_ends`; ``size``: the sheet's; ``tolerances``:
+    the merge tolerance and the curves' tolerance)."""
     attrs = _stray_border_as_cuts(verts, edges, attrs, pieces, sources, warnings)
     reach = SHORT_OF_BORDER_FRACTION * size
     edges, attrs, past = _trim_border_stubs(verts, edges, attrs, pieces, sources, reach, warnings)
@@ -1609,7 +1610,7 @@ def _clip_to_border(
         keep = np.ones(len(edges), bool)
         keep[outside] = False
         edges, attrs = edges[keep], attrs[keep]
-    return _snap_short_ends(verts, edges, attrs, pieces, sources, size, merge_tolerance, warnings)
+    return _snap_short_ends(verts, edges, attrs, pieces, sources, size, tolerances, warnings)
 
 
 def _border_degree(n: int, edges: np.ndarray, attrs: np.ndarray, pieces: _Pieces) -> tuple[np.ndarray, np.ndarray]:
@@ -1835,13 +1836,15 @@ def _snap_short_ends(
     pieces: _Pieces,
     sources: list[str],
     size: float,
-    merge_tolerance: float,
+    tolerances: tuple[float, float],
     warnings: list[str],
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Step 4 (end): free ends of creases (not cuts: :func:`_loose_ends`) that stop just short of the closed border
     (within :data:`SHORT_OF_BORDER_FRACTION` of the sheet) are moved onto it, at the nearest point of the border (a
-    vertex of it within ``merge_tolerance``, else a new one that splits its piece), with a warning naming them when
-    the gap was beyond the merge tolerance.
+    vertex of it within the merge tolerance, else a new one that splits its piece), with a warning naming them when
+    the gap was beyond the merge tolerance, or beyond the curves' tolerance where the border piece is a chord of a
+    curve (``tolerances``: both). A crease drawn exactly onto a curved hole ends on the curve, up to the tolerance
+    off its chord: the warning told a designer to draw to the border where they had (0.06 mm at a 5 mm interval).
 
     Drawn "to the edge" by eye, a crease often stops a few tenths of a millimetre short. Left there, it ended inside
     the paper at both ends and could not fold without stretching it: the verdict said the pattern "does not fold as
@@ -1858,6 +1861,7 @@ def _snap_short_ends(
     short = (gaps > 0.0) & (gaps <= reach)
     if not short.any():
         return verts, edges, attrs
+    merge_tolerance, tolerance = tolerances
     mover = _EndMover(verts, edges, attrs, merge_tolerance)
     moved: list[tuple[float, np.ndarray, int]] = []
     for w, side in zip(which[short], sides[short], strict=True):  # the border as split by the ends before
@@ -1868,7 +1872,8 @@ def _snap_short_ends(
         foot = segment_foot(np.broadcast_to(p, a.shape), a, b)
         dist = np.hypot(*(p - foot).T)
         k = int(np.argmin(dist))
-        if mover.move(w, side, int(border[k]), foot[k]) and dist[k] > merge_tolerance * (1.0 + 1e-6):
+        quiet = tolerance if pieces.from_curve[all_a[border[k]]] else merge_tolerance  # a chord, or the drawn line
+        if mover.move(w, side, int(border[k]), foot[k]) and dist[k] > max(quiet, merge_tolerance) * (1.0 + 1e-6):
             moved.append((float(dist[k]), p, int(attrs[w])))
     if moved:
         where = ", ".join(f"{g:.2g} mm at ({q[0]:.3f}, {q[1]:.3f})" for g, q, _ in moved[:4])
@@ -2173,7 +2178,9 @@ def discretize_steps(
     yield "planar arrangement"
     edges, attrs = _remove_duplicates(edges, attrs, pieces, sources, warnings)
     size = sheet_size(curves)
-    verts, edges, attrs = _clip_to_border(verts, edges, attrs, pieces, sources, size, merge_tolerance, warnings)
+    verts, edges, attrs = _clip_to_border(
+        verts, edges, attrs, pieces, sources, size, (merge_tolerance, tolerance), warnings
+    )
     verts, edges, attrs = _join_near_misses(
         verts, edges, attrs, pieces, sources, size, (merge_tolerance, tolerance), warnings
     )

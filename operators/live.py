@@ -1,8 +1,10 @@
-"""The Live toggle of a folded mesh; the live re-fold itself (detect, debounce, re-fold) is :mod:`..scene.live`."""
+"""The Live toggle of a folded mesh, and the Cancel button of a running job (a live re-fold has no modal handler to
+catch Esc); the live re-fold itself (detect, debounce, re-fold) is :mod:`..scene.live`."""
 
 from __future__ import annotations
 
 import bpy
+from bpy.props import StringProperty
 
 from . import _common
 
@@ -26,4 +28,25 @@ class CURVED_FOLD_OT_toggle_live(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (CURVED_FOLD_OT_toggle_live,)
+class CURVED_FOLD_OT_cancel_job(bpy.types.Operator):
+    """Cancel the job running on a folded mesh: the scene is left as it was before it"""
+
+    bl_idname = "curved_fold.cancel_job"
+    bl_label = "Cancel"
+    bl_description = "Stop the job running on this folded mesh; the scene is left exactly as it was before it"
+    bl_options = {"INTERNAL"}
+
+    owner: StringProperty(name="Owner", description="The folded mesh (or new fold) whose job to cancel")
+
+    def execute(self, context):
+        from ..scene import jobs
+
+        job = jobs.running_job(self.owner)
+        if job is None:
+            return {"CANCELLED"}
+        jobs.cancel(job)
+        self.report({"WARNING"}, f"Cancelled {job.kind} '{job.owner}'; the scene is as it was")
+        return {"FINISHED"}
+
+
+CLASSES = (CURVED_FOLD_OT_toggle_live, CURVED_FOLD_OT_cancel_job)

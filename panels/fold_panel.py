@@ -24,17 +24,22 @@ def _sources_changed(context) -> bool:
 
 
 def _job_progress(layout, name: str) -> None:
-    """Progress rows of the job running on the fold object ``name`` (iteration and residual, or frame k of n)."""
+    """Progress row of the job running on the fold object ``name`` (iteration and residual, or frame k of n) with
+    its Cancel button: a live re-fold runs on a timer, without the modal handler that catches Esc, and the row said
+    "Esc cancels" for it too (a designer session)."""
     from ..scene.jobs import running_job
 
     job = running_job(name)
     if job is None:
         return
-    text = f"{job.kind.capitalize()}: {job.progress.text(job.elapsed_ms / 1e3)} (Esc cancels)"
-    if hasattr(layout, "progress"):  # UILayout.progress: Blender 4.0+
-        layout.progress(factor=job.progress.fraction, type="BAR", text=text)
+    hint = "" if job.live else " (Esc cancels)"
+    text = f"{job.kind.capitalize()}: {job.progress.text(job.elapsed_ms / 1e3)}{hint}"
+    row = layout.row(align=True)
+    if hasattr(row, "progress"):  # UILayout.progress: Blender 4.0+
+        row.progress(factor=job.progress.fraction, type="BAR", text=text)
     else:  # pragma: no cover
-        layout.label(text=text, icon="TIME")
+        row.label(text=text, icon="TIME")
+    row.operator("curved_fold.cancel_job", text="", icon="CANCEL").owner = name
 
 
 class VIEW3D_PT_curved_fold_fold(SidebarPanel, bpy.types.Panel):

@@ -283,24 +283,51 @@ def test_live_keeps_the_bake_marked_out_of_date(folded, extension):
     live._pending.clear()
 
 
-def test_live_jobs_run_in_slices(folded, extension):
-    """Interactive live re-folds run on a timer in slices (here driven by hand) and end with the re-fold done."""
-    ob, _, _ = folded
+def _live_at_40(extension, ob):
+    """Live on for ``ob``, its Fold Percent set to 40 with no edit pending: the live and jobs modules."""
     live = mod(extension, "scene.live")
-    jobs = mod(extension, "scene.jobs")
     ob.curved_fold_mesh.live = True
     live._pending.clear()
     ob.curved_fold_mesh.fold_percent = 40.0
+    return live, mod(extension, "scene.jobs")
+
+
+def _live_off(live, ob) -> None:
+    """Live off again and its timers removed (they never fire headless)."""
+    ob.curved_fold_mesh.live = False
+    for timer in (live._timer, live._drive):
+        if bpy.app.timers.is_registered(timer):
+            bpy.app.timers.unregister(timer)
+
+
+def test_live_jobs_run_in_slices(folded, extension):
+    """Interactive live re-folds run on a timer in slices (here driven by hand) and end with the re-fold done."""
+    ob, _, _ = folded
+    live, jobs = _live_at_40(extension, ob)
     assert live.run_pending(blocking=False) == {ob.name: "running"}
     assert jobs.running_job(ob.name) is not None
     slices = 1
     while live.drive_slices(budget_ms=0.0):
         slices += 1
     assert slices > 2 and jobs.running_job(ob.name) is None and ob.curved_fold_mesh.last_iterations > 0
-    ob.curved_fold_mesh.live = False
-    for timer in (live._timer, live._drive):
-        if bpy.app.timers.is_registered(timer):
-            bpy.app.timers.unregister(timer)
+    _live_off(live, ob)
+
+
+def test_a_live_job_is_cancelled_by_its_cancel_button(folded, extension):
+    """A live re-fold runs on a timer, with no modal handler to catch Esc (its progress row said "Esc cancels"): the
+    row's Cancel button stops it, or any job on the object, and leaves the scene as it was."""
+    ob, _, _ = folded
+    live, jobs = _live_at_40(extension, ob)
+    before = exact_state()
+    assert live.run_pending(blocking=False) == {ob.name: "running"}
+    job = jobs.running_job(ob.name)
+    assert job is not None and job.live
+    run_slices_until(jobs, job, "solve", then=1)
+    assert exact_state() != before  # the preview moved the sheet
+    assert bpy.ops.curved_fold.cancel_job(owner=ob.name) == {"FINISHED"}
+    assert job.state == "cancelled" and exact_state() == before
+    assert bpy.ops.curved_fold.cancel_job(owner=ob.name) == {"CANCELLED"}  # nothing running
+    _live_off(live, ob)
 
 
 def test_transfer_positions_carries_the_shape_onto_a_new_mesh(folded, extension):

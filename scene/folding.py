@@ -423,17 +423,19 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
 
         def commit():
             now = [h.require("crease curve") for h in source_handles]
-            ob = create_fold(out, now, coll_name, options, target, scene)
-            source_state.record(ob, sources_fingerprint)
-            return ob, out
+            return create_fold(out, now, coll_name, options, target, scene, fingerprint=sources_fingerprint), out
 
         return commit
 
     return jobs.Job(name, "folding", steps(), preview)
 
 
-def create_fold(out: FoldOutcome, sources, coll_name, options: FoldOptions, target, scene=None) -> bpy.types.Object:
-    """Write a fold outcome as a new fold object (all or nothing) with its recipe; returns the object."""
+def create_fold(
+    out: FoldOutcome, sources, coll_name, options: FoldOptions, target, scene=None, *, fingerprint: str | None = None
+) -> bpy.types.Object:
+    """Write a fold outcome as a new fold object (all or nothing) with its recipe and the ``fingerprint`` of the
+    curves it was made from (:func:`source_state.record`: inside the all or nothing, where a failure had left the
+    half-made object and its crease curves behind); returns the object."""
     coll = bpy.data.collections.get(coll_name) if coll_name else None
     ob = None
     try:
@@ -457,6 +459,7 @@ def create_fold(out: FoldOutcome, sources, coll_name, options: FoldOptions, targ
         props.use_fold_angle, props.fold_angle = options.use_fold_angle, options.fold_angle
         props.fold_percent, props.solver = options.fold_percent, options.solver
         store_figures(ob, out)
+        source_state.record(ob, fingerprint)
     except Exception as exc:  # any write failure: remove what was made, leave the scene as it was
         mesh_object.remove_fold_object(ob)
         raise RuntimeError(f"writing the mesh failed: {exc}") from exc

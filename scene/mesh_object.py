@@ -359,17 +359,25 @@ def replace_fold_mesh(
 
 
 def remove_fold_object(ob: bpy.types.Object | None, me: bpy.types.Mesh | None = None) -> None:
-    """Delete a fold object, its mesh and its crease-curve children (used to undo a failed write)."""
+    """Delete a fold object, its mesh and its crease-curve children, and the materials they alone used (used to undo
+    a failed write: the crease curves' material was left behind)."""
+    materials = []
     if ob is not None:
         me = me or ob.data
         for child in list(_crease_curve_objects(ob).values()):
             cu = child.data
+            materials += [m for m in cu.materials if m is not None]
             bpy.data.objects.remove(child)
             if cu.users == 0:
                 bpy.data.curves.remove(cu)
         bpy.data.objects.remove(ob)
-    if me is not None and me.users == 0:
-        bpy.data.meshes.remove(me)
+    if me is not None:
+        materials += [m for m in me.materials if m is not None]
+        if me.users == 0:
+            bpy.data.meshes.remove(me)
+    for mat in {m.name: m for m in materials}.values():
+        if mat.users == 0:
+            bpy.data.materials.remove(mat)
 
 
 def write_pattern_attributes(ob: bpy.types.Object, mesh: FoldMesh, scene: bpy.types.Scene | None = None) -> None:

@@ -694,3 +694,23 @@ def test_exports_and_frame_changes_work_on_a_fold_in_edit_mode(folded, extension
     bpy.context.scene.frame_set(8)  # no traceback from the handler; the edit mesh is the user's
     assert bpy.ops.object.mode_set(mode="OBJECT") == {"FINISHED"}
     assert timeline.driven(ob)
+
+
+def test_a_fold_whose_commit_fails_leaves_nothing_behind(extension, clean_scene, monkeypatch):
+    """The new fold object is written all or nothing, the record of its source curves included: a failure there
+    (simulated) left the half-made object and its crease curves in the scene (a designer session)."""
+    jobs = mod(extension, "scene.jobs")
+    folding = mod(extension, "scene.folding")
+    source_state = mod(extension, "scene.source_state")
+    border, crease = curved_pattern()
+    select_only([border, crease])
+    before = exact_state()
+
+    def fails(*_args, **_kw):
+        raise MemoryError("simulated: out of memory")
+
+    monkeypatch.setattr(source_state, "record", fails)
+    job = jobs.start(folding.fold_job([border, crease], None, folding.FoldOptions(), scene=clean_scene))
+    with pytest.raises(RuntimeError, match="writing the mesh failed: simulated: out of memory"):
+        jobs.run_to_end(job)
+    assert job.state == "failed" and exact_state() == before

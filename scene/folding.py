@@ -17,7 +17,7 @@ import numpy as np
 
 from ..core import as_units
 from ..core.mesh.fold_mesh import FoldMesh
-from ..core.mesh.transfer import carried_shape
+from ..core.mesh.transfer import carried_shape_steps
 from ..core.pattern.model import PatternError
 from . import bake, jobs, mesh_object, pins, self_intersection, source_state
 from .curves import curve_objects, shown_crease_curves
@@ -541,7 +541,9 @@ def refold_job(
                 mesh, remesh = built, True
                 mesh_preview.set_mesh(mesh)
                 previews.active = mesh_preview
-        x0 = start if not remesh else carried_shape(stored, start, mesh)  # None: the creases moved, fold afresh
+        x0 = start  # a rebuild carries the shape over, in units (None: the creases moved, fold afresh)
+        if remesh:
+            x0 = yield from as_units(carried_shape_steps(stored, start, mesh), jobs.Progress("model"))
         constraints = None if remesh else held  # pins and glue name vertices of the stored mesh
         use = settings if x0 is not None else fresh_settings
         out = yield from _solve_steps(mesh, use, pct, method, start=x0, warnings=warnings, constraints=constraints)

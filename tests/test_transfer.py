@@ -9,7 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from curved_fold.core import run_to_end
 from curved_fold.core.io.reader import read_pattern
+from curved_fold.core.mesh import transfer
 from curved_fold.core.mesh.build import build_mesh
 from curved_fold.core.mesh.transfer import IN_PLACE_SHARE, carried_shape, creases_in_place
 from curved_fold.core.solve.solver import Solver
@@ -35,6 +37,27 @@ def test_the_same_pattern_keeps_its_shape(pleats) -> None:
     mesh, positions = pleats
     assert creases_in_place(mesh, mesh) == 1.0
     np.testing.assert_allclose(carried_shape(mesh, positions, mesh), positions, atol=1e-9)
+
+
+def test_the_carried_shape_comes_in_units_of_bounded_work(pleats, monkeypatch) -> None:
+    """A live re-fold runs the carried shape one unit per slice: each unit measures at most ``UNIT_PAIRS`` pairs
+    (in one call it took 194–265 ms on a 3,000-face pleat, the longest slice of its live re-fold), and the units
+    give the same shape."""
+    mesh, positions = pleats
+    whole = carried_shape(mesh, positions, mesh)
+    monkeypatch.setattr(transfer, "UNIT_PAIRS", 20 * len(mesh.triangles))
+    steps = transfer.carried_shape_steps(mesh, positions, mesh)
+    units = 0
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            carried = done.value
+            break
+        units += 1
+    assert units >= len(mesh.vertices) // 20  # 20 new vertices per unit against the old triangles, at least
+    np.testing.assert_array_equal(carried, whole)
+    assert run_to_end(transfer.creases_in_place_steps(mesh, mesh)) == 1.0
 
 
 def test_a_drawing_turned_or_scaled_as_a_whole_folds_afresh(pleats) -> None:

@@ -12,10 +12,18 @@ there converged in the cap to a mangled sheet (strain 0.81 % mean / 16.9 % max a
 
 from __future__ import annotations
 
+from collections.abc import Generator
+
 import numpy as np
 
+from .. import run_to_end
 from ..pattern.polylines import point_segment_distance
 from .fold_mesh import FoldMesh
+
+UNIT_PAIRS = 250_000
+"""Point–triangle or point–segment pairs measured per unit of :func:`carried_shape_steps` (~10 ms): a live re-fold
+runs them one unit per slice. In one call the carried shape of a 3,000-face pleat took 194–265 ms, the longest
+slice of its live re-fold (a designer session)."""
 
 IN_PLACE_SHARE = 0.9
 """A carried shape is a warm start when at least this share of the new creases' length lies on old creases of the
@@ -34,6 +42,18 @@ def transfer_positions(old: FoldMesh, old_positions: np.ndarray, new: FoldMesh) 
     """Each new vertex at the folded position of the point with its flat coordinates on the old mesh (barycentric
     in the old triangle containing it, or the nearest old vertex). Returns None when the sheets do not overlap
     (nothing to carry over)."""
+    return run_to_end(transfer_positions_steps(old, old_positions, new))
+
+
+def _rows(n_points: int, n_against: int) -> int:
+    """Points per unit: :data:`UNIT_PAIRS` pairs with ``n_against`` triangles or segments each."""
+    return max(1, UNIT_PAIRS // max(n_against, 1))
+
+
+def transfer_positions_steps(
+    old: FoldMesh, old_positions: np.ndarray | None, new: FoldMesh
+) -> Generator[None, None, np.ndarray | None]:
+    """:func:`transfer_positions` in units of :data:`UNIT_PAIRS` point–triangle pairs."""
     if old_positions is None:
         return None
     tri = old.triangles
@@ -44,18 +64,21 @@ def transfer_positions(old: FoldMesh, old_positions: np.ndarray, new: FoldMesh) 
     v0, v1 = b - a, c - a
     den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
     ok = np.abs(den) > 1e-15
-    for lo in range(0, len(p), 256):
-        q = p[lo : lo + 256, None, :] - a[None]
+    rows = _rows(len(p), len(tri))
+    for lo in range(0, len(p), rows):
+        if lo:
+            yield
+        q = p[lo : lo + rows, None, :] - a[None]
         u = (q[..., 0] * v1[None, :, 1] - v1[None, :, 0] * q[..., 1]) / np.where(ok, den, 1.0)
         v = (v0[None, :, 0] * q[..., 1] - q[..., 0] * v0[None, :, 1]) / np.where(ok, den, 1.0)
         inside = (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9) & ok[None]
         has = inside.any(axis=1)
         t = np.argmax(inside, axis=1)
-        rows = np.arange(len(t))
-        uu, vv = u[rows, t], v[rows, t]
+        at = np.arange(len(t))
+        uu, vv = u[at, t], v[at, t]
         pa, pb, pc = (old_positions[tri[t, k]] for k in range(3))
-        out[lo : lo + 256] = pa + uu[:, None] * (pb - pa) + vv[:, None] * (pc - pa)
-        found[lo : lo + 256] = has
+        out[lo : lo + rows] = pa + uu[:, None] * (pb - pa) + vv[:, None] * (pc - pa)
+        found[lo : lo + rows] = has
     if not found.any():
         return None
     for i in np.flatnonzero(~found):
@@ -72,6 +95,11 @@ def creases_in_place(old: FoldMesh, new: FoldMesh) -> float:
     """The share (by length) of ``new``'s mountain and valley edges whose two ends lie within
     :data:`IN_PLACE_DISTANCE` of the diagonal of a mountain or valley edge of ``old``, the one nearest its middle of
     the same role and target fold angle (1.0 when ``new`` has none)."""
+    return run_to_end(creases_in_place_steps(old, new))
+
+
+def creases_in_place_steps(old: FoldMesh, new: FoldMesh) -> Generator[None, None, float]:
+    """:func:`creases_in_place` in units of :data:`UNIT_PAIRS` point–segment pairs."""
     new_index, old_index = _creases(new), _creases(old)
     new_edges, old_edges = new.edges[new_index], old.edges[old_index]
     if not len(new_edges):
@@ -84,19 +112,23 @@ def creases_in_place(old: FoldMesh, new: FoldMesh) -> float:
     near = IN_PLACE_DISTANCE * float(np.hypot(*(hi - lo)))
     a, b = old.vertices[old_edges[:, 0], :2], old.vertices[old_edges[:, 1], :2]
 
-    def nearest_old(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def nearest_old(points: np.ndarray) -> Generator[None, None, tuple[np.ndarray, np.ndarray]]:
         """Distance of each point from the old creases, and the nearest one."""
         dist, which = np.empty(len(points)), np.empty(len(points), dtype=np.int64)
-        for start in range(0, len(points), 128):
-            chunk = points[start : start + 128]
-            rows = np.repeat(chunk, len(a), axis=0)
-            d = point_segment_distance(rows, np.tile(a, (len(chunk), 1)), np.tile(b, (len(chunk), 1)))
+        rows = _rows(len(points), len(a))
+        for start in range(0, len(points), rows):
+            yield
+            chunk = points[start : start + rows]
+            pairs = np.repeat(chunk, len(a), axis=0)
+            d = point_segment_distance(pairs, np.tile(a, (len(chunk), 1)), np.tile(b, (len(chunk), 1)))
             d = d.reshape(len(chunk), len(a))
-            which[start : start + 128] = np.argmin(d, axis=1)
-            dist[start : start + 128] = d[np.arange(len(chunk)), which[start : start + 128]]
+            which[start : start + rows] = np.argmin(d, axis=1)
+            dist[start : start + rows] = d[np.arange(len(chunk)), which[start : start + rows]]
         return dist, which
 
-    (dp, _), (dq, _), (_, partner) = nearest_old(p), nearest_old(q), nearest_old(0.5 * (p + q))
+    dp, _ = yield from nearest_old(p)
+    dq, _ = yield from nearest_old(q)
+    _, partner = yield from nearest_old(0.5 * (p + q))
     same = (new.assignments[new_index] == old.assignments[old_index[partner]]) & np.isclose(
         new.fold_angles[new_index], old.fold_angles[old_index[partner]], rtol=0.0, atol=1e-6, equal_nan=True
     )
@@ -107,6 +139,15 @@ def creases_in_place(old: FoldMesh, new: FoldMesh) -> float:
 def carried_shape(old: FoldMesh, old_positions: np.ndarray | None, new: FoldMesh) -> np.ndarray | None:
     """The warm start of a re-meshed pattern: :func:`transfer_positions` when the creases are still where the old
     fold put them (:func:`creases_in_place` ≥ :data:`IN_PLACE_SHARE`), else None (fold from the flat sheet)."""
-    if old_positions is None or creases_in_place(old, new) < IN_PLACE_SHARE:
+    return run_to_end(carried_shape_steps(old, old_positions, new))
+
+
+def carried_shape_steps(
+    old: FoldMesh, old_positions: np.ndarray | None, new: FoldMesh
+) -> Generator[None, None, np.ndarray | None]:
+    """:func:`carried_shape` in units (a Blender job runs one per slice)."""
+    if old_positions is None:
         return None
-    return transfer_positions(old, old_positions, new)
+    if (yield from creases_in_place_steps(old, new)) < IN_PLACE_SHARE:
+        return None
+    return (yield from transfer_positions_steps(old, old_positions, new))

@@ -356,9 +356,10 @@ def _solve_steps(mesh, settings, percent, method, *, start=None, warnings=None, 
     yield jobs.Progress("figures")  # the self-intersection test and the report: a unit each (~35 ms at 3,000 faces)
     crossing = None
     if np.all(np.isfinite(result.positions)):
-        from ..core.metrics.intersections import intersecting_faces
+        from ..core.metrics.intersections import intersecting_faces_steps
 
-        crossing = intersecting_faces(np.asarray(result.positions, dtype=np.float64), mesh.triangles)
+        positions = np.asarray(result.positions, dtype=np.float64)
+        crossing = yield from as_units(intersecting_faces_steps(positions, mesh.triangles), jobs.Progress("figures"))
         yield jobs.Progress("figures")
     report = make_report(
         mesh,

@@ -402,6 +402,7 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
     if not sources:
         raise PatternError("no crease curves selected: select curve objects that have a crease role")
     target = sources[0].users_collection[0] if sources[0].users_collection else bpy.context.scene.collection
+    target_name = target.name
     name = jobs.free_owner(new_fold_name(sources, coll))
     source_handles = [jobs.ObjectHandle(s) for s in sources]
     coll_name = coll.name if coll is not None else None
@@ -424,6 +425,12 @@ def fold_job(sources, coll, options: FoldOptions, *, scene=None) -> jobs.Job:
 
         def commit():
             now = [h.require("crease curve") for h in source_handles]
+            try:
+                target.name  # noqa: B018 - a removed collection raises ReferenceError here
+            except ReferenceError:
+                raise RuntimeError(
+                    f"the collection '{target_name}' was deleted while the job ran; nothing was written"
+                ) from None
             return create_fold(out, now, coll_name, options, target, scene, fingerprint=sources_fingerprint), out
 
         return commit

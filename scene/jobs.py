@@ -198,6 +198,7 @@ class MeshPreview:
         self.name = name
         self.handle = ObjectHandle(ob) if ob is not None else None
         self.collection = collection
+        self.collection_name = collection.name if collection is not None else ""
         self.place = place
         self.scene = scene
         self.mesh = None
@@ -229,7 +230,15 @@ class MeshPreview:
             ob.data = me
         else:
             ob = bpy.data.objects.new(f"{self.name} (folding)", me)
-            (self.collection or bpy.context.scene.collection).objects.link(ob)
+            try:
+                (self.collection or bpy.context.scene.collection).objects.link(ob)
+            except ReferenceError:  # the collection was deleted while the job ran
+                bpy.data.objects.remove(ob)
+                bpy.data.meshes.remove(me)
+                self.me_name = None
+                raise RuntimeError(
+                    f"the collection '{self.collection_name}' was deleted while the job ran; nothing was written"
+                ) from None
             self.tmp = ObjectHandle(ob)
             if self.place is not None:
                 self.place(ob)

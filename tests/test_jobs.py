@@ -714,3 +714,28 @@ def test_a_fold_whose_commit_fails_leaves_nothing_behind(extension, clean_scene,
     with pytest.raises(RuntimeError, match="writing the mesh failed: simulated: out of memory"):
         jobs.run_to_end(job)
     assert job.state == "failed" and exact_state() == before
+
+
+def test_a_fold_whose_collection_is_deleted_while_it_runs_says_so(extension, clean_scene):
+    """The collection the new fold goes into deleted while the fold ran: "writing the mesh failed: StructRNA of type
+    Collection has been removed" (a designer session); now one line that says what happened, nothing written."""
+    jobs = mod(extension, "scene.jobs")
+    folding = mod(extension, "scene.folding")
+    border, crease = curved_pattern()
+    for then in (0, 3):  # before the preview is made, and after (the commit finds the collection gone)
+        coll = bpy.data.collections.new("Pattern")
+        clean_scene.collection.children.link(coll)
+        for ob in (border, crease):
+            coll.objects.link(ob)
+            for other in list(ob.users_collection):
+                if other != coll:
+                    other.objects.unlink(ob)
+        job = jobs.start(folding.fold_job([border, crease], coll, folding.FoldOptions(), scene=clean_scene))
+        run_slices_until(jobs, job, "solve", then=then)
+        assert (bpy.data.objects.get("Pattern Folded (folding)") is not None) == bool(then)
+        for ob in (border, crease):
+            clean_scene.collection.objects.link(ob)
+        bpy.data.collections.remove(coll)
+        with pytest.raises(RuntimeError, match="the collection 'Pattern' was deleted while the job ran; nothing was"):
+            jobs.run_to_end(job)
+        assert job.state == "failed" and not [ob for ob in bpy.data.objects if "Folded" in ob.name], then

@@ -151,11 +151,14 @@ def drive_slices(budget_ms: float | None = None) -> bool:
             budget = jobs.SLICE_MS if budget_ms is None else budget_ms
             if jobs.run_slice(job, budget / max(len(_live_jobs), 1)):
                 _live_jobs.pop(name, None)
-        except folding.engine_errors() as exc:
+        except Exception as exc:  # noqa: BLE001 - the job has ended (run_slice restored its preview); a traceback out
+            # of the timer would stop it for every live fold: one line on the object, as the modal operators report
             _live_jobs.pop(name, None)
             ob = bpy.data.objects.get(name)
             if ob is not None:
-                ob.curved_fold_mesh.last_message = f"live re-fold failed: {exc}"
+                known = isinstance(exc, folding.engine_errors())
+                why = str(exc) if known else f"the scene changed while it ran ({type(exc).__name__}: {exc})"
+                ob.curved_fold_mesh.last_message = f"live re-fold failed: {why}"
         finally:
             _guard["running"] = False
         if not job.running:

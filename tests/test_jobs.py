@@ -674,6 +674,38 @@ def test_edit_mode_during_a_job_stops_it_and_leaves_the_object_as_it_was(folded,
     assert job.state == "cancelled" and ob.mode == "OBJECT" and exact_state() == before
 
 
+def test_edit_mode_during_a_live_re_fold_stops_it_with_a_message(folded, extension):
+    """A live re-fold runs on a timer: Edit Mode under it stops it as it stops a modal job (the object back in Object
+    Mode as it was), with the reason on the object, and the timer goes on for other live folds (an error out of the
+    timer body would have stopped it)."""
+    ob, _, _ = folded
+    live, jobs = _live_at_40(extension, ob)
+    before = exact_state()
+    assert live.run_pending(blocking=False) == {ob.name: "running"}
+    job = jobs.running_job(ob.name)
+    run_slices_until(jobs, job, "solve", then=1)
+    _edit(ob)
+    assert live.drive_slices(budget_ms=0.0) is False  # no live job left, no exception out of the timer body
+    assert job.state == "failed" and ob.mode == "OBJECT" and exact_state() == before
+    assert ob.curved_fold_mesh.last_message.startswith("live re-fold failed: 'Border Folded' was put in Edit Mode")
+    # any other failure under the timer (the scene changed) ends the job the same way, with no exception out of it
+    ob.curved_fold_mesh.fold_percent = 50.0
+    assert live.run_pending(blocking=False) == {ob.name: "running"}
+    job = jobs.running_job(ob.name)
+
+    def broken():
+        yield jobs.Progress("solve")
+        raise KeyError("position")
+
+    job.steps = broken()
+    assert live.drive_slices(budget_ms=0.0) is True  # the first unit
+    assert live.drive_slices(budget_ms=0.0) is False and job.state == "failed"
+    assert ob.curved_fold_mesh.last_message == (
+        "live re-fold failed: the scene changed while it ran (KeyError: 'position')"
+    )
+    _live_off(live, ob)
+
+
 def test_exports_and_frame_changes_work_on_a_fold_in_edit_mode(folded, extension, tmp_path):
     """In Edit Mode a mesh's arrays are empty: Export Mesh and Export SVG ended in a Python traceback, and every frame
     change of a keyframed fold printed one from its handler (a designer session). Exports now read the edit mesh, as

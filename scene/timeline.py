@@ -302,9 +302,30 @@ def on_frame_change(scene, depsgraph=None) -> None:
         try:
             if not driven(ob):
                 continue
-            fold_to_frame(ob, scene.frame_current, scene=scene)
+            entry = fold_to_frame(ob, scene.frame_current, scene=scene)
         except folding.engine_errors() as exc:
             ob.curved_fold_mesh.last_message = f"frame {scene.frame_current}: {exc}"
+            continue
+        _say_frame(ob.curved_fold_mesh, scene.frame_current, entry)
+
+
+FRAME_NOTE = "not converged in playback's"
+"""What a frame's note says (:func:`_say_frame`), so the next converged frame clears only such a note."""
+
+
+def _say_frame(props, frame: int, entry: CachedFrame) -> None:
+    """Show on the panel whether the frame just shown converged: playback stopped it at
+    :data:`FRAME_MAX_ITERATIONS` without a word, and the panel still showed the static fold's figures (a designer
+    session counted 16 unconverged frames of 60 on Carved_Cylinder). A converged frame clears such a note."""
+    if not entry.converged:
+        note = (
+            f"frame {frame}: {FRAME_NOTE} {FRAME_MAX_ITERATIONS} iterations (residual {entry.residual:.1e}); "
+            "Bake solves it fully"
+        )
+        if props.last_message != note:
+            props.last_message = note
+    elif FRAME_NOTE in props.last_message:
+        props.last_message = ""
 
 
 @persistent

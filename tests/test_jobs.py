@@ -248,6 +248,29 @@ def test_frame_change_folds_keyframed_percent_and_bake_equals_cache(folded, exte
     assert cache.get(5, timeline.percent_at(ob, 5), ob.curved_fold_mesh) is None
 
 
+def test_a_frame_that_playback_leaves_unconverged_says_so(folded, extension, monkeypatch):
+    """Playback stops a frame at ``FRAME_MAX_ITERATIONS``: the panel said nothing and kept the static fold's
+    figures (a designer session: 16 of 60 frames unconverged on Carved_Cylinder). The frame's note says so now,
+    and the next converged frame clears it (not other messages)."""
+    ob, _, _ = folded
+    timeline = mod(extension, "scene.timeline")
+    props = ob.curved_fold_mesh
+    keyframe_percent(ob, {1: 10.0, 9: 90.0})
+    bpy.context.scene.frame_set(5)
+    assert props.last_message == ""
+    monkeypatch.setattr(timeline, "FRAME_MAX_ITERATIONS", 1)  # a warm frame after it gets one iteration
+    bpy.context.scene.frame_set(6)
+    assert props.last_message.startswith("frame 6: not converged in playback's 1 iterations (residual ")
+    assert props.last_message.endswith("; Bake solves it fully")
+    monkeypatch.setattr(timeline, "FRAME_MAX_ITERATIONS", 12)
+    timeline.clear()
+    bpy.context.scene.frame_set(7)
+    assert props.last_message == ""
+    props.last_message = "an earlier warning"
+    bpy.context.scene.frame_set(8)
+    assert props.last_message == "an earlier warning"
+
+
 def test_live_keeps_the_bake_marked_out_of_date(folded, extension):
     ob, _, crease = folded
     scene = bpy.context.scene

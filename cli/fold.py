@@ -15,14 +15,19 @@ from ..core.pattern.model import PatternError
 from .outputs import check_outputs, finite_json, stdout_to_devnull
 from .progress import Progress
 
-OUTPUT_SUFFIXES = (".fold", ".obj", ".stl", ".glb", ".blend")
+OUTPUT_SUFFIXES = (".fold", ".obj", ".stl", ".glb", ".blend", ".svg")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``fold`` subcommand."""
     p = sub.add_parser("fold", help="fold a crease pattern (.svg/.fold/.blend) and write the folded mesh")
     p.add_argument("input", help="crease pattern: .svg, .fold or .blend")
-    p.add_argument("--out", required=True, help="output: .fold, .obj, .stl, .glb or .blend")
+    p.add_argument(
+        "--out",
+        required=True,
+        help="output: .fold, .obj, .stl, .glb or .blend (the folded mesh), or .svg (its flat crease pattern, as "
+        "Export SVG writes it)",
+    )
     p.add_argument(
         "--unit",
         default=None,
@@ -128,6 +133,13 @@ def _write_mesh(tmp: Path, out: Path, fold, quiet: bool = False, unit: str | Non
         from ..core.io.fold import write_folded_fold
 
         write_folded_fold(tmp, fold.mesh, [fold.result.positions], [fold.result.fold_angles])
+        return
+    if out.suffix.lower() == ".svg":  # the flat crease pattern, as Blender's Export SVG writes it from the fold
+        try:
+            from ..scene.export import write_pattern_svg
+        except ImportError as exc:  # pragma: no cover - depends on the Blender side being installed
+            raise PatternError(f"--out {out}: .svg output needs Blender's bpy ({exc})") from exc
+        write_pattern_svg(tmp, fold.mesh)
         return
     try:
         from ..scene.export import check_complete, export_folded_file

@@ -94,6 +94,24 @@ def test_our_svg_export_imported_folds_like_the_command_line(extension, clean_sc
     assert len(ours.vertices) == run.mesh.n_vertices
 
 
+def test_the_command_line_writes_the_flat_svg_that_export_svg_writes(extension, clean_scene, tmp_path):
+    """``fold X --out x.svg`` writes the fold's flat crease pattern, byte for byte what Blender's Export SVG writes
+    of the same file's fold (it was Blender-only: "unknown output type '.svg'", a parity review session), but for
+    the ``data-source`` notes, which name where each stroke came from (Blender names the curve object too)."""
+    import re
+
+    from curved_fold.cli import main
+
+    path = FIXTURES / "origami-simulator" / "Treble_Clef.svg"
+    assert main(["fold", str(path), "--out", str(tmp_path / "cli.svg"), "-q"]) == 0
+    import_file(path)
+    assert bpy.ops.curved_fold.fold(collection=path.stem) == {"FINISHED"}
+    assert bpy.ops.curved_fold.export_pattern_svg(filepath=str(tmp_path / "ui.svg")) == {"FINISHED"}
+    cli, ui = ((tmp_path / name).read_text() for name in ("cli.svg", "ui.svg"))
+    assert cli.count("<polyline") == ui.count("<polyline") >= 2  # the border and the valley chains
+    assert re.sub(r' data-source="[^"]*"', "", cli) == re.sub(r' data-source="[^"]*"', "", ui)
+
+
 def test_the_fold_object_keeps_its_pattern_to_the_last_bit(extension, clean_scene):
     """Blender's attributes are single precision; the fold object keeps the flat positions and the target fold angles
     as doubles too, so what reads it back (Re-fold, Bake, Export SVG) has the mesh the fold was made of. From the

@@ -165,6 +165,10 @@ def test_cli_reads_sidecar_json_and_fold_fields(tmp_path, capsys):
         (json.dumps({"pins": [[1, 2, 3]]}), "pin 0 must be 2 finite numbers"),
         (json.dumps({"glue": [[[0, 0]]]}), "glue 0 must be a pair of points"),
         (json.dumps({"pins": [[70.0, -30.0]]}), "is not a vertex of the meshed sheet"),
+        # a CLI review session's: a target at 1e300 folded to nan and was written out (exit 0); random bytes gave a
+        # traceback
+        (json.dumps({"pins": [{"point": [0, 0], "target": [0, 0, 1e300]}]}), "pin 0 target [0, 0, 1e+300] is beyond"),
+        (b"\x00\xff\xfe junk", "not UTF-8 text (byte 1)"),
     ],
 )
 def test_bad_constraints_one_clear_line(tmp_path, capsys, content, message):
@@ -172,10 +176,37 @@ def test_bad_constraints_one_clear_line(tmp_path, capsys, content, message):
 
     svg = _strip(tmp_path)
     bad = tmp_path / "bad.json"
-    bad.write_text(content)
+    if isinstance(content, bytes):
+        bad.write_bytes(content)
+    else:
+        bad.write_text(content)
     assert main(["fold", str(svg), "--out", str(tmp_path / "o.fold"), "--constraints", str(bad)]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
+
+
+def test_a_constraints_file_is_read_as_an_input_file(tmp_path, capsys, monkeypatch):
+    """A constraints file, given or found beside the pattern, is checked as the pattern is: a regular file within
+    the size limit. ``--constraints /dev/zero`` grew to 24 GB before the kernel killed it, and a named pipe hung (a
+    CLI review session)."""
+    import os
+
+    from curved_fold.cli import main
+
+    svg = _strip(tmp_path)
+    out = str(tmp_path / "o.fold")
+    assert main(["fold", str(svg), "--out", out, "--constraints", "/dev/zero"]) == 2
+    assert capsys.readouterr().err.strip().endswith("/dev/zero: is a device or socket, not a regular file")
+    pipe = tmp_path / "pipe.json"
+    os.mkfifo(pipe)
+    assert main(["fold", str(svg), "--out", out, "--constraints", str(pipe)]) == 2
+    assert "is a FIFO (named pipe), not a regular file" in capsys.readouterr().err
+    monkeypatch.setenv("CURVED_FOLD_MAX_FILE_MB", "1")
+    sidecar = svg.with_name(svg.stem + ".constraints.json")
+    with open(sidecar, "wb") as fh:
+        fh.truncate(3 * 1024 * 1024)  # sparse: 3 MB of zeros
+    assert main(["fold", str(svg), "--out", out]) == 2
+    assert "strip.constraints.json: file size 3.0 MB is above the limit of 1 MB" in capsys.readouterr().err
 
 
 def test_faithful_solver_refuses_constraints(single_curve_mesh):

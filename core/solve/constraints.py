@@ -24,7 +24,9 @@ from typing import Any
 
 import numpy as np
 
+from ..io.reader import read_input_bytes
 from ..mesh.fold_mesh import FoldMesh
+from ..pattern.discretize import MAX_COORDINATE_MM
 from ..pattern.model import PatternError
 
 GLUE_STIFFNESS = 1e6
@@ -191,8 +193,16 @@ def _point(value: Any, size: int, what: str, source: str) -> tuple[float, ...]:
     except (TypeError, ValueError):
         p = ()
     if len(p) != size or not all(np.isfinite(p)):
-        raise PatternError(f"{source}: {what} must be {size} finite numbers, got {value!r}")
+        raise PatternError(f"{source}: {what} must be {size} finite numbers, got {_short(value)}")
+    if max(abs(v) for v in p) > MAX_COORDINATE_MM:  # a pin target at 1e300 folded to nan and was written out
+        raise PatternError(f"{source}: {what} {_short(value)} is beyond ±{MAX_COORDINATE_MM:g} mm")
     return p
+
+
+def _short(value: Any) -> str:
+    """``value`` as a message quotes it: its repr, cut to 80 characters."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def parse_constraints(data: dict[str, Any], source: str = "constraints") -> ConstraintSpec:
@@ -234,10 +244,17 @@ def read_constraints(pattern_path: str | Path, explicit: str | Path | None = Non
     if explicit is None and sidecar.exists():
         candidates.append(sidecar)
     for path in candidates:
+        # an input file like the pattern: a regular file within the size limit (a constraints file of /dev/zero
+        # grew to 24 GB before the kernel killed it, a named pipe hung, random bytes gave a traceback)
+        raw = read_input_bytes(path, "constraints JSON")
         try:
-            data = json.loads(path.read_text(encoding="utf-8"))
+            data = json.loads(raw.decode("utf-8-sig"))
+        except UnicodeDecodeError as exc:
+            raise PatternError(f"{path}: not UTF-8 text (byte {exc.start}); save the constraints as UTF-8") from None
         except json.JSONDecodeError as exc:
             raise PatternError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from exc
+        except RecursionError:
+            raise PatternError(f"{path}: JSON nested too deeply") from None
         spec = parse_constraints(data, str(path))
         if not spec.empty or path != pattern_path:
             return spec

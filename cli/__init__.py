@@ -28,15 +28,21 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _load_blender(args: argparse.Namespace) -> None:
     """Load Blender's ``bpy`` up front when this run needs it — a .blend input (registers the Blender layer's .blend
-    reader) or an output only Blender's exporters write (.glb, .obj, .stl, .blend) — before the signal handlers are
-    installed: a SIGTERM arriving while ``bpy`` registers its bundled add-ons would be swallowed by their error
-    handling. Other runs (.svg/.fold in, .fold out) load it only if the ruling swaps need ``bmesh`` (a pattern with
-    curve pieces, ``core.mesh.build``): it costs start-up time (~0.35 s CPU) and memory (~240 MB)."""
-    paths = [str(getattr(args, "input", "")), str(getattr(args, "out", "") or "")]
-    if not any(p.lower().endswith((".blend", ".glb", ".gltf", ".obj", ".stl")) for p in paths):
+    reader) or an output only the Blender layer writes (.glb, .obj, .stl, .blend, .svg) — with SIGINT and SIGTERM
+    held until it is loaded (:func:`.core.io.atomic.signals_held`): raised while ``bpy`` registers its bundled
+    add-ons, their error handling swallowed a Ctrl+C, and the run replaced the output file. Other runs (.svg/.fold
+    in, .fold out) load it only if the ruling swaps need ``bmesh`` (a pattern with curve pieces,
+    ``core.mesh.build``): it costs start-up time (~0.35 s CPU) and memory (~240 MB)."""
+    source, out = str(getattr(args, "input", "")).lower(), str(getattr(args, "out", "") or "").lower()
+    if not (source.endswith(".blend") or out.endswith((".blend", ".glb", ".gltf", ".obj", ".stl", ".svg"))):
         return
+    from ..core import load_bpy
+    from ..core.io.atomic import signals_held
+
     try:
-        from ..scene import curves, export  # noqa: F401  (curves registers read_blend_file with core.io.reader)
+        load_bpy()
+        with signals_held():  # the Blender layer registers a reader; a Ctrl+C in there must not be swallowed either
+            from ..scene import curves, export  # noqa: F401  (curves registers read_blend_file with core.io.reader)
     except ImportError:
         pass
 
@@ -52,9 +58,9 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = build_parser()
     args = parser.parse_args(argv)
-    _load_blender(args)
     previous = install_signal_cleanup()
     try:
+        _load_blender(args)
         return int(args.func(args) or 0)
     except PatternError as exc:
         print(f"curved_fold: error: {exc}", file=sys.stderr)

@@ -4,6 +4,7 @@ Everything here takes and returns plain data (numpy arrays, small dataclasses) a
 or ``bpy.context``; only the edge swaps use ``bmesh`` (as the design card asks). See ``docs/architecture.md``.
 """
 
+import sys
 from collections.abc import Generator
 from typing import TypeVar
 
@@ -33,3 +34,14 @@ def as_units(steps: Generator[object, None, _R], label: object) -> Generator[obj
         except StopIteration as done:
             return done.value
         yield label
+
+
+def load_bpy() -> None:
+    """Import Blender's ``bpy`` module (``bmesh`` and ``mathutils`` need it first) with SIGINT and SIGTERM held
+    until it is loaded (:func:`.io.atomic.signals_held`): ~0.35 s of Blender set-up that must not be cut."""
+    if "bpy" in sys.modules:
+        return
+    from .io.atomic import signals_held
+
+    with signals_held():
+        import bpy  # noqa: F401

@@ -17,6 +17,7 @@ import resource
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -556,6 +557,36 @@ def test_sigterm_during_a_command_line_fold(tmp_path):
         assert err.strip().splitlines()[-1] == "curved_fold: terminated (unfinished temporary files removed)"
         assert out.read_bytes() == OLD_BYTES
     assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]
+
+
+def test_signals_while_blender_loads_are_held_then_acted_on():
+    """``bpy`` registers its bundled add-ons inside error handlers: a Ctrl+C raised in there was swallowed (the run
+    went on and replaced the output file) or left Blender half set up (a segmentation fault at exit; a CLI review
+    session). While it loads, SIGINT and SIGTERM are held; after, they act as the handlers in force would have."""
+    from curved_fold.core.io.atomic import signals_held
+
+    def terminate(signum, _frame):
+        raise SystemExit(128 + signum)
+
+    done = []
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler), signal.signal(signal.SIGTERM, terminate)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with signals_held():
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)  # delivered here: held
+                done.append("loaded")
+        with pytest.raises(SystemExit) as stopped:
+            with signals_held():
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.05)
+                done.append("loaded again")
+        assert stopped.value.code == 143 and done == ["loaded", "loaded again"]
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        assert signal.getsignal(signal.SIGTERM) is terminate
+    finally:
+        signal.signal(signal.SIGINT, previous[0])
+        signal.signal(signal.SIGTERM, previous[1])
 
 
 def test_command_line_restores_the_signal_handlers(tmp_path):

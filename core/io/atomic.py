@@ -263,6 +263,34 @@ def install_signal_cleanup() -> dict[int, Any]:
     return previous
 
 
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM until the body is done, then act on the first that came, as the handlers in force
+    would have (a :class:`KeyboardInterrupt`, a :class:`SystemExit`). For loading Blender's ``bpy``: its bundled
+    add-ons register inside error handlers, so a Ctrl+C raised in there was swallowed (the run went on and
+    replaced the output file) or left Blender half set up (a segmentation fault at exit; a CLI review session)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[int] = []
+    previous: dict[int, Any] = {}
+    for signum in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
+        if signum is not None:
+            previous[signum] = signal.signal(signum, lambda number, _frame: came.append(number))
+    try:
+        yield
+    finally:
+        restore_signal_handlers(previous)
+    if came:
+        handler = previous.get(came[0])
+        if callable(handler):
+            handler(came[0], None)
+        elif came[0] == signal.SIGINT and handler is not signal.SIG_IGN:
+            raise KeyboardInterrupt
+        elif handler is signal.SIG_DFL:
+            raise SystemExit(128 + came[0])
+
+
 def restore_signal_handlers(previous: dict[int, Any]) -> None:
     """Put back the handlers :func:`install_signal_cleanup` replaced."""
     for signum, handler in previous.items():

@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .. import run_to_end
+from .. import load_bpy, run_to_end
 from ..pattern.model import CreasePattern
 from .earcut import ear_clip
 from .fold_mesh import FoldMesh
@@ -127,7 +127,7 @@ def _load_blender_modules(mesh_type: str, backend: str, pattern: CreasePattern) 
     (CircularPleat-antiFacet never: its command-line fold to .fold no longer loads Blender, 3.3 → 3.0 s CPU)."""
     swaps = mesh_type == "ruling" and bool(np.any(pattern.edge_from_curve))
     if swaps or resolve_backend(backend) == "mathutils":
-        import bpy  # noqa: F401  (bmesh and mathutils need bpy imported first in the bpy module)
+        load_bpy()  # bmesh and mathutils need bpy imported first in the bpy module
 
 
 def _warn_separate_pieces(verts: np.ndarray, tris: np.ndarray, warnings: list[str]) -> None:

@@ -47,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import run_to_end
+from .. import load_bpy, run_to_end
 from .squash import SQUASH_STRAIN, squash_flips
 from .triangulate import _orient2, orient
 
@@ -566,11 +566,8 @@ def _apply_with_bmesh_steps(
     level of independent swaps) and return the BMesh's triangles, for the check against the decided ones; yields
     after building the ``bmesh`` and after every :data:`SWAP_UNIT_LEVELS` swaps or so (whole levels). Closing the
     generator between units frees the ``bmesh``."""
-    # isort: off
-    import bpy  # noqa: F401  (bmesh needs bpy imported first in the bpy module)
+    load_bpy()  # bmesh needs bpy imported first in the bpy module
     import bmesh
-
-    # isort: on
 
     bm = bmesh.new()
     try:

@@ -37,6 +37,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from .. import load_bpy
 from ..pattern.model import CreasePattern, PatternError
 from ..pattern.polylines import point_segment_distance
 
@@ -150,7 +151,7 @@ class _CrossingError(PatternError):
 
 
 def _cdt_mathutils(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
-    import bpy  # noqa: F401  (mathutils needs bpy imported first in the bpy module)
+    load_bpy()  # mathutils needs bpy imported first in the bpy module
     from mathutils.geometry import delaunay_2d_cdt
 
     centre = points.mean(axis=0)

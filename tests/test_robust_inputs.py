@@ -1083,3 +1083,16 @@ def test_css_import_does_not_drop_the_next_rule() -> None:
     drawing = parse_svg_text(svg(body), "t.svg")
     assert sorted(c.assignment for c in drawing.curves) == ["B", "V"]
     assert any("CSS at-rules not followed: @import" in w for w in drawing.warnings)
+
+
+def test_an_element_id_is_quoted_on_one_short_line(tmp_path, capsys) -> None:
+    """Messages quote the element's id: an id holding a newline (``&#10;``) made a four-line error, a 1 MB id a
+    1 MB line (a CLI review session). Control characters are escaped and the id is cut to 40 characters."""
+    from curved_fold.cli import main
+
+    for ident, shown in (("bor&#10;der", "bor\\nder"), ("A" * 100_000, "A" * 37 + "...")):
+        path = tmp_path / "bad.svg"
+        path.write_text(svg(BORDER + f'<rect id="{ident}" x="0" y="0" width="15em" height="10" stroke="#000000"/>'))
+        assert main(["fold", str(path), "--out", str(tmp_path / "o.fold")]) == 2
+        err = capsys.readouterr().err
+        assert len(err.splitlines()) == 1 and len(err) < 400 and f"SVG <rect id='{shown}'> (line " in err, err[:300]

@@ -1174,8 +1174,16 @@ def _group_opacity(own: dict[str, str]) -> float | None:
     return opacity if opacity < 1.0 else None
 
 
+ID_SHOWN = 40
+"""Most characters of an element's id a message quotes (a 1 MB id made a 1 MB message line)."""
+
+
 def _describe(elem: _Element) -> str:
     ident = elem.attrib.get("id")
+    if ident:
+        # one line whatever the id holds (an id with &#10; made a four-line error), and a short one
+        ident = "".join(c if c.isprintable() else repr(c)[1:-1] for c in ident)
+        ident = ident if len(ident) <= ID_SHOWN else ident[: ID_SHOWN - 3] + "..."
     tag = f"<{elem.tag} id='{ident}'>" if ident else f"<{elem.tag}>"
     return f"SVG {tag} (line {elem.line})"
 

@@ -278,8 +278,11 @@ def check_complete(path: Path, suffix: str, n_vertices: int) -> None:
             head = fh.read(84)
         if len(head) == 84 and not head.startswith(b"solid"):
             expected = 84 + 50 * int.from_bytes(head[80:84], "little")
-            if expected != size:
-                raise OSError(f"the STL file is incomplete ({size} of {expected} bytes written)")
+            if expected != size:  # a writer cut short can leave a header that counts no triangles yet
+                raise OSError(
+                    f"the STL file is incomplete ({size} bytes written, its header counts "
+                    f"{int.from_bytes(head[80:84], 'little')} triangles: {expected} bytes)"
+                )
     elif suffix == ".blend":
         with open(path, "rb") as fh:
             fh.seek(max(size - 64, 0))

@@ -589,6 +589,21 @@ def test_signals_while_blender_loads_are_held_then_acted_on():
         signal.signal(signal.SIGTERM, previous[1])
 
 
+def test_a_write_error_that_names_no_file_names_the_users_path(tmp_path):
+    """A full disk during ``write()`` raises an OSError that names no file: the report's message said only
+    "[Errno 28] No space left on device" (a CLI review session). It names the user's path now."""
+    import errno
+
+    from curved_fold.core.io.atomic import atomic_output
+
+    out = tmp_path / "r.json"
+    with pytest.raises(OSError) as failed:
+        with atomic_output(out):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    assert str(failed.value) == f"[Errno 28] No space left on device: '{out}'"
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
 def test_command_line_restores_the_signal_handlers(tmp_path):
     from curved_fold.cli import main
 

@@ -122,9 +122,11 @@ def _remove(name: str) -> None:
 
 
 def _name_user_path(exc: BaseException, tmp: str, user: Path) -> None:
-    """Rewrite an exception's message in place so it names ``user`` instead of the temporary file ``tmp``."""
-    if isinstance(exc, OSError) and exc.filename == tmp:
-        exc.filename = str(user)
+    """Rewrite an exception's message in place so it names ``user`` instead of the temporary file ``tmp``, or names
+    ``user`` where it named no file (a full disk during a write: the report's message named neither the option nor
+    the path; a CLI review session)."""
+    if isinstance(exc, OSError) and exc.filename in (tmp, None) and exc.errno is not None:
+        exc.filename = str(user)  # a failed write() names no file ("[Errno 28] No space left on device")
     exc.args = tuple(a.replace(tmp, str(user)) if isinstance(a, str) else a for a in exc.args)
 
 

@@ -1096,3 +1096,16 @@ def test_an_element_id_is_quoted_on_one_short_line(tmp_path, capsys) -> None:
         assert main(["fold", str(path), "--out", str(tmp_path / "o.fold")]) == 2
         err = capsys.readouterr().err
         assert len(err.splitlines()) == 1 and len(err) < 400 and f"SVG <rect id='{shown}'> (line " in err, err[:300]
+
+
+def test_a_crease_scaled_to_a_point_is_named() -> None:
+    """A valley under ``transform="scale(0)"`` vanished without a word (a CLI review session); it is named now."""
+    crease = '<path id="valley" transform="{}" d="M 40 0 C 70 30 70 70 40 100" stroke="#00f" opacity="0.5"/>'
+    p = pattern_of(BORDER + crease.format("scale(0)"))
+    assert p.count("V") == 0
+    assert any(
+        w.startswith("1 curve(s) drawn as a point (no length; a transform may scale them to nothing) left out: SVG ")
+        and "id='valley'" in w
+        for w in p.warnings
+    ), p.warnings
+    assert not any("as a point" in w for w in pattern_of(BORDER + crease.format("scale(1)")).warnings)

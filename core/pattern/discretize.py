@@ -1212,6 +1212,7 @@ def _discretise_curves(
             f"on {_describe_sources(sources, np.array(below_merge))}: points closer than that are merged, so those "
             "curves are followed less closely than asked; pass a larger --tolerance"
         )
+    _warn_points(curves, sources, points, owner, merge_tolerance, warnings)
     if cusps:
         (k, at), more = cusps[0], f" and {len(cusps) - 1} more" if len(cusps) > 1 else ""
         warnings.append(
@@ -1230,6 +1231,28 @@ def _discretise_curves(
         assignment=assignment[edge_poly],
         fold_angle=fold_angle[edge_poly],
     )
+
+
+def _warn_points(
+    curves: list[CreaseCurve],
+    sources: list[str],
+    points: list[np.ndarray],
+    owner: list[int],
+    merge_tolerance: float,
+    warnings: list[str],
+) -> None:
+    """Warn about drawn curves that are a point (every sample within the merge tolerance of their first): they
+    leave no crease. A valley under ``transform="scale(0)"`` vanished without a word (a CLI review session), while
+    ``scale(0, 1)`` was warned about as a crease lying on the border."""
+    spread = np.zeros(len(curves))
+    for pts, k in zip(points, owner, strict=True):
+        spread[k] = max(spread[k], float(np.max(np.hypot(*(pts - pts[0]).T))))
+    dots = [k for k in range(len(curves)) if curves[k].segments and spread[k] <= merge_tolerance]
+    if dots:
+        warnings.append(
+            f"{len(dots)} curve(s) drawn as a point (no length; a transform may scale them to nothing) left out: "
+            f"{_describe_sources(sources, np.array(dots))}"
+        )
 
 
 def _planar_arrangement(

@@ -62,12 +62,17 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _check_numbers(args: argparse.Namespace) -> None:
-    """``--percent`` in [0, 100] and ``--angle`` in [−180, 180] degrees, both finite (150 % would set 270° targets)."""
+    """``--percent`` in [0, 100] and ``--angle`` in [−180, 180] degrees, both finite (150 % would set 270° targets);
+    ``--interval`` and ``--tolerance`` positive millimetres."""
     if not (math.isfinite(args.percent) and 0.0 <= args.percent <= 100.0):
         raise PatternError(f"--percent {args.percent:g}: must be a number from 0 to 100")
     if args.angle is not None and not (math.isfinite(args.angle) and -180.0 <= args.angle <= 180.0):
         shown = f"{args.angle:.6g}" if math.isfinite(args.angle) else str(args.angle)
         raise PatternError(f"--angle {shown}: must be a number of degrees from -180 to 180")
+    for name in ("interval", "tolerance"):  # as discretize checks them: a FOLD input ignored --tolerance nan
+        value = getattr(args, name)
+        if value is not None and not (value > 0 and math.isfinite(value)):
+            raise PatternError(f"--{name} {value:g}: must be a positive number of mm")
 
 
 def _last_error_line(exc: BaseException) -> str:

@@ -1046,13 +1046,20 @@ def test_fold_huge_integer_coordinate(tmp_path: Path) -> None:
         (["--angle", "1e9"], r"--angle 1e\+09: must be a number of degrees from -180 to 180"),
         (["--angle", "-181"], r"--angle -181: must be"),
         (["--angle", "nan"], r"--angle nan: must be"),
+        # on a FOLD file of ours (its interval kept) these were ignored; on SVG the message named "discretisation"
+        (["--tolerance", "nan"], r"--tolerance nan: must be a positive number of mm"),
+        (["--interval", "-3"], r"--interval -3: must be a positive number of mm"),
     ],
 )
 def test_percent_and_angle_ranges(option, message, tmp_path, capsys) -> None:
     src = REPO / "tests" / "fixtures" / "origami-simulator" / "simpleVertex.svg"
-    code, out, err, _ = run_cli(["fold", str(src), "--out", str(tmp_path / "o.fold"), *option], capsys)
-    assert code == 2 and re.search(message, err), err
-    assert len(err) < 200 and list(tmp_path.iterdir()) == []
+    ours = tmp_path / "in" / "ours.fold"
+    ours.parent.mkdir()
+    assert run_cli(["discretize", str(src), "--out", str(ours)], capsys)[0] == 0
+    for given in (src, ours):
+        code, out, err, _ = run_cli(["fold", str(given), "--out", str(tmp_path / "o.fold"), *option], capsys)
+        assert code == 2 and re.search(message, err), err
+        assert len(err) < 200 and not (tmp_path / "o.fold").exists()
 
 
 def test_fifo_and_folder_inputs_are_refused(tmp_path, capsys) -> None:

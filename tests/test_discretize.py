@@ -889,6 +889,29 @@ def test_a_polyline_drawn_finer_than_the_tolerance_is_thinned() -> None:
     assert time.process_time() - t0 < 5.0  # it took 40 s with the fold
 
 
+def test_thinning_tests_a_few_chords_per_chord_kept(monkeypatch) -> None:
+    """A chord that passes too near another vertex is shortened by bisection, not one point at a time: a CLI review
+    session's 150,000-point circle (a FOLD file within every limit) made 90,000 tests of nearby vertices and took
+    40 s. Here a dense circle with a second one a tolerance away inside it, so that long chords are not clear."""
+    from curved_fold.core.pattern import polylines
+
+    calls = []
+    real = polylines.point_segment_distance
+    monkeypatch.setattr(polylines, "point_segment_distance", lambda *a: calls.append(1) or real(*a))
+    n = 20_000
+    th = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    outer = np.c_[100 * np.cos(th), 100 * np.sin(th)]
+    inner = np.c_[99.93 * np.cos(th[::50]), 99.93 * np.sin(th[::50])]  # 0.07 mm inside: obstacles to long chords
+    v = np.r_[outer, inner]
+    e = np.c_[np.arange(n), (np.arange(n) + 1) % n]
+    kept, chords, _ = polylines.thin_dense_polylines(
+        v, e, np.array(["B"] * n), np.full(n, np.nan), np.ones(n, bool), 5.0, 0.1
+    )
+    assert len(chords) > 100
+    steps = len(chords) + int(kept.sum())  # a chord, or a piece kept as drawn
+    assert len(calls) <= 14 * steps, (len(calls), steps)
+
+
 def test_thinning_a_tight_spiral_takes_bounded_memory() -> None:
     """A review session's 20,000-point spiral of 0.15 mm pitch: thousands of its points lie within the interval of
     each start, and the candidate chords' arrays (count × count) took 12 GB before the process was killed (6,000

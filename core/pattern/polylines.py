@@ -247,10 +247,17 @@ def thin_dense_polylines(
                 # tolerance of its ends (a polyline drawn finer than the tolerance: the next one always is, and
                 # nothing was thinned: 0.05 mm points gave 17,976 faces and 40 s); the rest of its chain is (the
                 # far side of a slot)
-                while best > i + 1 and not clear(
-                    int(chain[i]), int(chain[best]), _beside(v, chain, i, best, tolerance)
-                ):
-                    best -= 1
+                if best > i + 1 and not clear(int(chain[i]), int(chain[best]), _beside(v, chain, i, best, tolerance)):
+                    # the longest clear chord below it, by bisection (a chord clear of other vertices is so when
+                    # shortened): one step at a time, a 150,000-point circle took 90,000 tests and 40 s
+                    lo, hi = i + 1, best
+                    while hi - lo > 1:
+                        mid = (lo + hi) // 2
+                        if clear(int(chain[i]), int(chain[mid]), _beside(v, chain, i, mid, tolerance)):
+                            lo = mid
+                        else:
+                            hi = mid
+                    best = lo
                 if best > i + 1:
                     kept[pieces[i:best]] = False
                     chords.append((int(chain[i]), int(chain[best])))

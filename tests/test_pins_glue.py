@@ -169,6 +169,9 @@ def test_cli_reads_sidecar_json_and_fold_fields(tmp_path, capsys):
         # traceback
         (json.dumps({"pins": [{"point": [0, 0], "target": [0, 0, 1e300]}]}), "pin 0 target [0, 0, 1e+300] is beyond"),
         (b"\x00\xff\xfe junk", "not UTF-8 text (byte 1)"),
+        # named with the file and the entries (it said only "a vertex is pinned twice"; a CLI review session)
+        (json.dumps({"pins": [[0, 0], [0, 0.0001]]}), "bad.json: pins 0 and 1 are the same vertex (0, 0)"),
+        (json.dumps({"glue": [[[0, 0], [0, 0]]]}), "bad.json: glue 0 joins the vertex (0, 0) to itself"),
     ],
 )
 def test_bad_constraints_one_clear_line(tmp_path, capsys, content, message):

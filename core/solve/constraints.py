@@ -182,6 +182,21 @@ class ConstraintSpec:
         pins = [vertex(p, "pin") for p, _ in self.pins]
         targets = [(np.nan, np.nan, np.nan) if t is None else t for _, t in self.pins]
         glue = [(vertex(a, "glue"), vertex(b, "glue")) for a, b in self.glue]
+        where = self.source or "constraints"
+
+        def at(k: int) -> str:
+            x, y = mesh.vertices[k]
+            return f"({x:g}, {y:g})"
+
+        # named here, with the file and the entries: Constraints.check said only "a vertex is pinned twice"
+        first: dict[int, int] = {}
+        for k, v in enumerate(pins):
+            if v in first:
+                raise PatternError(f"{where}: pins {first[v]} and {k} are the same vertex {at(v)}")
+            first[v] = k
+        for k, (a, b) in enumerate(glue):
+            if a == b:
+                raise PatternError(f"{where}: glue {k} joins the vertex {at(a)} to itself (its two points snap to it)")
         out = Constraints(np.array(pins, dtype=np.int64), np.array(targets, dtype=np.float64).reshape(-1, 3), glue)
         out.check(mesh.n_vertices)
         return out

@@ -218,15 +218,28 @@ def test_plain_fold_reading_defaults() -> None:
 def test_v10_spelling_3d_flat_and_units() -> None:
     text = fold_text(
         edges_foldAngle=None,
-        edges_foldAngles=[None, None, None, None, -45],
+        edges_foldAngles=[None, None, None, None, 45],
         vertices_coords=[[0, 0, 0], [1, 0, 0], [1, 1, 1e-15], [0, 1, 0]],
         frame_unit="cm",
     )
     doc = parse_fold(text, "v1.fold")
     p = fold_to_pattern(doc)
-    assert p.fold_angles[4] == -45
+    assert p.fold_angles[4] == 45
     np.testing.assert_allclose(p.vertices, [[0, 0], [10, 0], [10, 10], [0, 10]])
     assert doc.frames == []
+
+
+def test_a_fold_angle_of_the_other_sign_than_its_assignment_folds_as_assigned() -> None:
+    """A valley at −180° was folded as a mountain without a word (a CLI review session): the assignment, which the
+    drawing shows and an SVG's colour gives, sets the sign, and a warning names the edge."""
+    doc = parse_fold(fold_text(edges_foldAngle=[None, None, None, None, -180]), "sign.fold")
+    assert fold_to_pattern(doc).fold_angles[4] == 180
+    assert any(
+        w.startswith("sign.fold: edges_foldAngle[4] = -180 on a valley (edges_assignment V): FOLD folds valleys")
+        for w in doc.warnings
+    ), doc.warnings
+    doc = parse_fold(fold_text(edges_foldAngle=[None, None, None, None, 90]), "ok.fold")
+    assert fold_to_pattern(doc).fold_angles[4] == 90 and not any("FOLD folds" in w for w in doc.warnings)
 
 
 def test_folded_3d_file_without_flat_coordinates() -> None:

@@ -131,6 +131,24 @@ def _angles(value: Any, name: str, source: str) -> np.ndarray:
     return out
 
 
+def _roles_sign_angles(angles: np.ndarray, assign: np.ndarray, src: str, warnings: list[str]) -> None:
+    """Give mountains negative and valleys positive fold angles (the FOLD spec's signs), in place, with a warning
+    naming the edges whose sign said the other: a valley at −180° was folded as a mountain without a word (a CLI
+    review session). The assignment is what the drawing shows and what an SVG's colour gives; a tool that writes
+    mountains positive gets the fold its colours ask for."""
+    wrong = np.flatnonzero(((assign == "V") & (angles < 0)) | ((assign == "M") & (angles > 0)))
+    if not len(wrong):
+        return
+    k = int(wrong[0])
+    more = f" and {len(wrong) - 1} more" if len(wrong) > 1 else ""
+    warnings.append(
+        f"{src}: edges_foldAngle[{k}] = {angles[k]:g} on a {'valley' if assign[k] == 'V' else 'mountain'} "
+        f"(edges_assignment {assign[k]}){more}: FOLD folds valleys positive and mountains negative; folded as "
+        "the assignment says"
+    )
+    angles[wrong] = -angles[wrong]
+
+
 def parse_fold(text: str, source_name: str = "<fold>") -> FoldDocument:
     """Check and convert FOLD JSON text (see :class:`FoldDocument`)."""
     src = source_name
@@ -162,6 +180,7 @@ def parse_fold(text: str, source_name: str = "<fold>") -> FoldDocument:
     assign = np.array(assignments, dtype="<U1")
     if "edges_foldAngle" in data:
         angles = _angles(data["edges_foldAngle"], "edges_foldAngle", src)
+        _roles_sign_angles(angles, assign, src, warnings)
     else:
         angles = np.where(assign == "F", 0.0, np.nan)
     faces = []

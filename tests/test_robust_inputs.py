@@ -1116,3 +1116,17 @@ def test_a_crease_scaled_to_a_point_is_named() -> None:
         for w in p.warnings
     ), p.warnings
     assert not any("as a point" in w for w in pattern_of(BORDER + crease.format("scale(1)")).warnings)
+
+
+@pytest.mark.parametrize("width", ["1e400mm", "1e12mm"])
+def test_a_drawing_size_beyond_the_coordinate_limit_is_refused_at_the_root(tmp_path, capsys, width) -> None:
+    """``width="1e400mm"`` was read as infinity: a numpy warning, then an error blaming the first shape (a CLI
+    review session). The root's size is checked first, in one line."""
+    from curved_fold.cli import main
+
+    path = tmp_path / "wide.svg"
+    path.write_text(svg(BORDER).replace('width="100mm"', f'width="{width}"', 1))
+    assert f'width="{width}"' in path.read_text()
+    assert main(["fold", str(path), "--out", str(tmp_path / "o.fold")]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == f"curved_fold: error: wide.svg: width='{width}' is beyond 1e+08 mm", err

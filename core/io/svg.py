@@ -1088,14 +1088,11 @@ def _nested_viewport(
     return shift @ _fit(vbox, elem.attrib.get("preserveAspectRatio"), width, height), (vbox[2], vbox[3])
 
 
-MAX_SIZE_MM = 1e8
-"""Largest width or height of a drawing (100 km, the discretisation's coordinate limit): ``width="1e400mm"`` was
-read as infinity, made every coordinate nan, and the error blamed the first shape (a CLI review session)."""
-
-
 def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float, tuple[float, float] | None]:
     """User units → mm (y up) as a 3×3 matrix, the viewport's width and height in mm, and its size in user units
-    (what percentages are of; None when the file gives no size).
+    (what percentages are of; None when the file gives no size). A width or height that is not a finite length is
+    refused here (``width="1e400mm"`` was read as infinity, made every coordinate nan, and the error blamed the first
+    shape; a CLI review session); a finite absurd one is caught at the coordinates, with a hint at the units.
 
     With a ``viewBox`` the user box is fitted into ``width × height`` (:func:`_fit`). Missing ``width``/``height``
     fall back to the viewBox size in px. Without one, a user unit is a px. The result ends with the flip
@@ -1104,8 +1101,8 @@ def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float, tup
     w_mm, _ = _length_mm(root.attrib.get("width"))
     h_mm, _ = _length_mm(root.attrib.get("height"))
     for name, value in (("width", w_mm), ("height", h_mm)):
-        if value is not None and not (math.isfinite(value) and value <= MAX_SIZE_MM):  # 1e400mm: inf, then nan
-            raise PatternError(f"{where}: {name}={root.attrib.get(name)!r} is beyond {MAX_SIZE_MM:g} mm")
+        if value is not None and not math.isfinite(value):  # 1e400mm: inf, then nan coordinates
+            raise PatternError(f"{where}: {name}={root.attrib.get(name)!r} is not a finite length")
     vbox = _viewbox(root, where)
     if vbox is not None:
         vw, vh = vbox[2], vbox[3]

@@ -174,9 +174,9 @@ def _convergence(report: dict) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..core.io.constraints_file import read_constraints
     from ..core.io.reader import read_pattern
     from ..core.pipeline import fold_pattern
-    from ..core.solve.constraints import read_constraints
 
     out = Path(args.out)
     if out.suffix.lower() not in OUTPUT_SUFFIXES:

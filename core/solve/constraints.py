@@ -11,20 +11,17 @@ with control points and gluing some points on the surface together increases the
 
 Two forms: :class:`ConstraintSpec` names points by their flat position in the pattern (what a user can write before
 the mesh exists: the command line's ``curved_fold:pins``/``curved_fold:glue`` FOLD fields or a JSON file beside the
-pattern), :class:`Constraints` holds mesh vertex indices (what the solver uses; Blender's vertex groups give these
-directly). :meth:`ConstraintSpec.resolve` maps one onto the other.
+pattern, read by :mod:`..io.constraints_file`), :class:`Constraints` holds mesh vertex indices (what the solver
+uses; Blender's vertex groups give these directly). :meth:`ConstraintSpec.resolve` maps one onto the other.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..io.reader import read_input_bytes
 from ..mesh.fold_mesh import FoldMesh
 from ..pattern.discretize import MAX_COORDINATE_MM
 from ..pattern.model import PatternError
@@ -244,33 +241,3 @@ def parse_constraints(data: dict[str, Any], source: str = "constraints") -> Cons
             raise PatternError(f"{source}: glue {k} must be a pair of points [[x1, y1], [x2, y2]], got {item!r}")
         spec.glue.append((_point(item[0], 2, f"glue {k}", source), _point(item[1], 2, f"glue {k}", source)))
     return spec
-
-
-def read_constraints(pattern_path: str | Path, explicit: str | Path | None = None) -> ConstraintSpec:
-    """The pins and glue of a pattern file: ``explicit`` (a JSON file) if given, else the ``curved_fold:pins``/
-    ``curved_fold:glue`` fields of a ``.fold`` input, else ``<pattern>.constraints.json`` beside it, else none."""
-    pattern_path = Path(pattern_path)
-    candidates: list[Path] = []
-    if explicit is not None:
-        candidates.append(Path(explicit))
-    elif pattern_path.suffix.lower() == ".fold":
-        candidates.append(pattern_path)
-    sidecar = pattern_path.with_name(pattern_path.stem + SIDECAR_SUFFIX)
-    if explicit is None and sidecar.exists():
-        candidates.append(sidecar)
-    for path in candidates:
-        # an input file like the pattern: a regular file within the size limit (a constraints file of /dev/zero
-        # grew to 24 GB before the kernel killed it, a named pipe hung, random bytes gave a traceback)
-        raw = read_input_bytes(path, "constraints JSON")
-        try:
-            data = json.loads(raw.decode("utf-8-sig"))
-        except UnicodeDecodeError as exc:
-            raise PatternError(f"{path}: not UTF-8 text (byte {exc.start}); save the constraints as UTF-8") from None
-        except json.JSONDecodeError as exc:
-            raise PatternError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from exc
-        except RecursionError:
-            raise PatternError(f"{path}: JSON nested too deeply") from None
-        spec = parse_constraints(data, str(path))
-        if not spec.empty or path != pattern_path:
-            return spec
-    return ConstraintSpec()

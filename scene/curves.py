@@ -447,7 +447,8 @@ def read_blend_file(
                 data_to.collections = list(data_from.collections)
                 data_to.scenes = list(data_from.scenes[:1])
         except OSError as exc:
-            raise PatternError(f"{path}: cannot read as a .blend file ({exc})") from exc
+            why = " ".join(str(exc).split())  # Blender's message ends in a newline: one line (a CLI review session)
+            raise PatternError(f"{path}: cannot read as a .blend file ({why})") from exc
         scenes = [s for s in data_to.scenes if s is not None]
         scale = unit_scale
         if scale is None:

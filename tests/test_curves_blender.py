@@ -335,6 +335,13 @@ def test_read_blend_file_leaves_the_open_file_alone(mod, clean_scene, tmp_path):
     (tmp_path / "text.blend").write_text("not a blend file")
     with pytest.raises(mod.PatternError, match="text.blend: cannot read as a .blend file"):
         mod.read_blend_file(tmp_path / "text.blend")
+    # a .blend cut short: Blender's message ends in a newline, the refusal is one line (a CLI review session)
+    whole = tmp_path / "whole.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(whole), copy=True)
+    (tmp_path / "cut.blend").write_bytes(whole.read_bytes()[:2000])
+    with pytest.raises(mod.PatternError, match="cut.blend: cannot read as a .blend file") as refused:
+        mod.read_blend_file(tmp_path / "cut.blend")
+    assert "\n" not in str(refused.value), str(refused.value)
     assert len(bpy.data.libraries) == 0
 
 

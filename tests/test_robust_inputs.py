@@ -516,8 +516,12 @@ def test_nan_in_svg_path_names_element_line_and_character() -> None:
 
 
 def test_infinite_number_in_svg_path() -> None:
-    with pytest.raises(PatternError, match=r"SVG <path id='c1'> \(line 3\): bad path data: number out of range"):
+    """The number itself is quoted, where it starts (it quoted the token after it; a CLI review session)."""
+    line = r"SVG <path id='c1'> \(line 3\): bad path data: number out of range at '1e400' \(character 5\)"
+    with pytest.raises(PatternError, match=line):
         pattern_of(BORDER + '<path id="c1" d="M50 1e400 L50 100" stroke="#f00"/>')
+    with pytest.raises(PatternError, match=r"number out of range at '9{21}\.\.\.' \(character 5\)$"):
+        pattern_of(BORDER + f'<path id="c1" d="M50 {"9" * 400} L50 100" stroke="#f00"/>')
 
 
 def test_nan_in_a_curve_object_names_the_curve() -> None:

@@ -597,10 +597,13 @@ class _PathScanner:
         m = _NUMBER.match(self.d, self.pos)
         if not m:
             raise self.fail("expected a number")
-        self.pos = m.end()
         x = float(m.group(0))
-        if not math.isfinite(x):
-            raise self.fail("number out of range")
+        if not math.isfinite(x):  # named where it starts (it named the token after it; a CLI review session)
+            shown = m.group(0) if len(m.group(0)) <= 24 else m.group(0)[:21] + "..."
+            raise PatternError(
+                f"{self.where}: bad path data: number out of range at {shown!r} (character {self.pos + 1})"
+            )
+        self.pos = m.end()
         return x
 
     def flag(self) -> bool:

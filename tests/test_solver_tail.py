@@ -289,3 +289,25 @@ def test_rigid_shift_is_the_exact_curvature_of_the_rotations():
         assert np.linalg.eigvalsh(li @ (U.T @ H @ U) @ li.T + shift * np.eye(3))[0] >= -1e-9
         shifts.append(shift)
     assert shifts[0] == shifts[1] == 0.0 and min(shifts[2:]) > 0.0
+
+
+def test_repeated_saddle_escapes_follow_the_curve_out(monkeypatch):
+    """A circular pleat drawn with CSS classes (eleven rings, ``tests/data/circular_pleat_css.svg``) leaves several
+    saddles on its way to 100 %. From the third escape of a solve on, an escape follows the curve out of the saddle
+    (``newton.CURVED_ESCAPES_AFTER``): the same minimum in fewer iterations and escapes (measured 51 and 4 against
+    65 and 6 straight). A designer's edited CircularPleat crept so for 200 escapes, 500 iterations (367 now)."""
+    from pathlib import Path
+
+    from curved_fold.core.io.reader import read_pattern
+    from curved_fold.core.mesh.build import build_mesh
+    from curved_fold.core.solve.solver import Solver
+
+    mesh = build_mesh(read_pattern(Path(__file__).parent / "data" / "circular_pleat_css.svg"))
+    curved = Solver(mesh).solve(1.0)
+    monkeypatch.setattr(newton, "CURVED_ESCAPES_AFTER", 10**9)
+    straight = Solver(mesh).solve(1.0)
+    for r in (curved, straight):
+        assert r.converged and r.negative_pivots == 0, r.message
+    assert abs(curved.energy - straight.energy) <= 1e-8 * straight.energy
+    assert curved.saddle_escapes >= 3 and curved.saddle_escapes < straight.saddle_escapes
+    assert curved.iterations <= straight.iterations - 8, (curved.iterations, straight.iterations)

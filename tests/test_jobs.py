@@ -134,19 +134,25 @@ def test_refold_job_cancel_restores_bake_and_positions(folded, extension):
     assert exact_state() == before
 
 
+def _rebuild_shown(jobs, folding, ob, crease):
+    """A crease curve edited, and the re-mesh it asks for started and run until its preview mesh is shown (curves
+    read and 4 discretisation steps, mesh, model in several units, then a solve): ``(exact_state()`` before the job,
+    the object's own mesh name, the job)."""
+    crease.data.splines[0].bezier_points[1].handle_left = (0.08, 0.03, 0)
+    bpy.context.view_layer.update()
+    before, own = exact_state(), ob.data.name
+    job = jobs.start(folding.refold_job(ob, rebuild=True, warm_start=True))
+    run_slices_until(jobs, job, "solve", then=1)
+    return before, own, job
+
+
 def test_rebuild_job_cancel_restores_mesh(folded, extension):
     """A re-mesh after a curve edit previews a new mesh datablock on the object; cancel gives the object its own
     mesh back and removes the preview mesh."""
     ob, _, crease = folded
     jobs = mod(extension, "scene.jobs")
     folding = mod(extension, "scene.folding")
-    crease.data.splines[0].bezier_points[1].handle_left = (0.08, 0.03, 0)
-    bpy.context.view_layer.update()
-    before = exact_state()
-    own = ob.data.name
-    job = jobs.start(folding.refold_job(ob, rebuild=True, warm_start=True))
-    # curves read and 4 discretisation steps, mesh, model (several units), solve: the new mesh is shown
-    run_slices_until(jobs, job, "solve", then=1)
+    before, own, job = _rebuild_shown(jobs, folding, ob, crease)
     assert ob.data.name != own  # the preview mesh is shown
     jobs.cancel(job)
     assert ob.data.name == own and exact_state() == before
@@ -627,12 +633,7 @@ def test_a_save_while_jobs_run_writes_the_scene_as_it_was(folded, extension, tmp
     mid-bake the file held muted keys and a partial frame; mid-fold a stray half-folded mesh."""
     ob, border, crease = folded
     jobs, folding, bake, scene = _baked_three_frames(extension)
-    crease.data.splines[0].bezier_points[1].handle_left = (0.08, 0.03, 0)
-    bpy.context.view_layer.update()
-    edited = exact_state()
-    own = ob.data.name
-    rebuild = jobs.start(folding.refold_job(ob, rebuild=True, warm_start=True))
-    run_slices_until(jobs, rebuild, "solve", then=1)
+    edited, own, rebuild = _rebuild_shown(jobs, folding, ob, crease)
     fresh = jobs.start(folding.fold_job([border, crease], None, folding.FoldOptions(), scene=scene))
     run_slices_until(jobs, fresh, "solve", then=1)
     preview = positions_mm(ob).copy()
@@ -687,11 +688,7 @@ def test_edit_mode_during_a_job_stops_it_and_leaves_the_object_as_it_was(folded,
     mod(extension, "scene.timeline").on_save_pre()
     assert job.state == "cancelled" and ob.mode == "OBJECT" and exact_state() == before
     # a rebuild shows a preview mesh on the object: Esc pressed in Edit Mode gives the object its own mesh back
-    crease.data.splines[0].bezier_points[1].handle_left = (0.08, 0.03, 0)
-    bpy.context.view_layer.update()
-    before = exact_state()
-    job = jobs.start(folding.refold_job(ob, rebuild=True, warm_start=True))
-    run_slices_until(jobs, job, "solve", then=1)
+    before, _, job = _rebuild_shown(jobs, folding, ob, crease)
     _edit(ob)
     jobs.cancel(job)
     assert job.state == "cancelled" and ob.mode == "OBJECT" and exact_state() == before

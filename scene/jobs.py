@@ -359,24 +359,28 @@ def _leave_edit_mode(ob: bpy.types.Object) -> None:
             view_layer.objects.active = active
 
 
-def _restore(job: Job) -> bool:
+def _in_edit_mode(job: Job) -> bpy.types.Object | None:
+    """The object ``job``'s preview changes, if it is in Edit Mode (else None)."""
+    ob = job.preview.edited() if job.preview is not None else None
+    return ob if ob is not None and ob.mode == "EDIT" else None
+
+
+def _restore(job: Job) -> None:
     """Restore ``job``'s preview, leaving Edit Mode first if its object was put there (in Edit Mode the mesh's
-    arrays are empty and the restore failed: a Bake under Tab stayed "busy" for good). Returns whether it did."""
+    arrays are empty and the restore failed: a Bake under Tab stayed "busy" for good)."""
     if job.preview is None:
-        return False
-    ob = job.preview.edited()
-    edited = ob is not None and ob.mode == "EDIT"
-    if edited:
+        return
+    ob = _in_edit_mode(job)
+    if ob is not None:
         _leave_edit_mode(ob)
     job.preview.restore()
-    return edited
 
 
 def _check_not_edited(job: Job) -> None:
     """Raise :class:`EditModeError` if the object ``job`` previews on is in Edit Mode (its next write would be lost,
     or fail)."""
-    ob = job.preview.edited() if job.preview is not None else None
-    if ob is not None and ob.mode == "EDIT":
+    ob = _in_edit_mode(job)
+    if ob is not None:
         raise EditModeError(
             f"'{ob.name}' was put in Edit Mode while {job.kind}: stopped; it is back in Object Mode as it was"
         )
@@ -480,13 +484,14 @@ def hide_previews() -> None:
     """Before a save: every running job's preview restored, so the file holds the scene as it was before the job
     (:func:`show_previews` puts the previews back after it). Saved with a bake running, the file held its muted
     keys and a partial frame; saved during a rebuild, the object pointed at the temporary mesh and the bake's keys
-    were not in the file (a designer session's Ctrl+S). A job whose object is in Edit Mode is stopped: the restore
-    takes it out of Edit Mode (:func:`_restore`), and its preview could not be shown again there."""
+    were not in the file (a designer session's Ctrl+S). A job whose object is in Edit Mode is cancelled: its
+    preview could not be shown again there (:func:`cancel` takes the object out of Edit Mode to restore it)."""
     for job in list(_jobs.values()):
         if job.running and job.preview is not None:
-            if _restore(job):  # its object was in Edit Mode, and is no longer: the job cannot go on
-                job.steps.close()
-                _end(job, "cancelled")
+            if _in_edit_mode(job) is not None:
+                cancel(job)
+            else:
+                job.preview.restore()
 
 
 def show_previews() -> None:

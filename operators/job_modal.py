@@ -89,12 +89,9 @@ class JobOperator:
             return {"CANCELLED"}
         try:
             ended = jobs.run_slice(job)
-        except folding.engine_errors() as exc:
-            self._end_ui(context)
-            return self._fail(exc)
-        except Exception as exc:  # noqa: BLE001 - anything else (the user changed the scene under the job): one line,
-            self._end_ui(context)  # the timer and status text removed, the preview already restored by run_slice
-            return self._fail(RuntimeError(f"the scene changed while it ran ({type(exc).__name__}: {exc})"))
+        except Exception as exc:  # noqa: BLE001 - the engine's errors, or the user changed the scene under the job:
+            self._end_ui(context)  # one line; the timer and status text removed, the preview restored by run_slice
+            return self._fail(RuntimeError(folding.failure_reason(exc)))
         if not ended:
             self._status(context)
             return {"RUNNING_MODAL"}

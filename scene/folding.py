@@ -67,6 +67,15 @@ def engine_errors() -> tuple[type[BaseException], ...]:
     return tuple(errors)
 
 
+def failure_reason(exc: BaseException) -> str:
+    """What a job's failure tells the user, in one line: the engine's own message, or, for anything else (the user
+    changed the scene under the job), "the scene changed while it ran (…)". The modal operators and the live
+    re-folds' timer say it alike."""
+    if isinstance(exc, engine_errors()):
+        return str(exc)
+    return f"the scene changed while it ran ({type(exc).__name__}: {exc})"
+
+
 def solver_settings(props, *, max_iterations: int | None = None):
     """``core.solve.solver.SolverSettings`` from a fold object's settings (defaults when ``props`` is None);
     ``max_iterations`` caps the solver (live re-folds)."""

@@ -156,9 +156,7 @@ def drive_slices(budget_ms: float | None = None) -> bool:
             _live_jobs.pop(name, None)
             ob = bpy.data.objects.get(name)
             if ob is not None:
-                known = isinstance(exc, folding.engine_errors())
-                why = str(exc) if known else f"the scene changed while it ran ({type(exc).__name__}: {exc})"
-                ob.curved_fold_mesh.last_message = f"live re-fold failed: {why}"
+                ob.curved_fold_mesh.last_message = f"live re-fold failed: {folding.failure_reason(exc)}"
         finally:
             _guard["running"] = False
         if not job.running:

@@ -670,14 +670,38 @@ def _escape_curvature(
     ``q`` solves the saddle's factorisation against ``d²F/dt²`` along ``w`` (central differences about a fresh
     evaluation at ``x``, so round-off in the caller's forces cannot choose it), its part along ``w`` removed: even
     in ``w``, the same on both sides. Zero when not small beside ``w``."""
+    f0 = evaluate(model, x, theta, percent).forces
+    stats.force_evaluations += 1
+    return _curve_correction(model, factor, x, theta, f0, w, percent, stats, fx, across=True)
+
+
+def _curve_correction(
+    model: BarHingeModel,
+    factor: DissectionFactor,
+    x: np.ndarray,
+    theta: np.ndarray,
+    f0: np.ndarray,
+    d: np.ndarray,
+    percent: float,
+    stats: NewtonStats,
+    fx: Fixed,
+    *,
+    across: bool = False,
+) -> np.ndarray:
+    """``q`` solving ``factor`` against ``d²F/dt²`` along the direction ``d`` (central differences, ``t = ±0.1``,
+    about the forces ``f0`` at ``x``): the second-order term of the curve ``x + a d + ½ a² q`` that
+    :func:`_geodesic_acceleration` and :func:`_escape_curvature` step along. ``across``: its part along ``d``
+    removed. Zero when not finite or not small beside ``d`` (``|q| > |d|``)."""
     h = 0.1
-    f0, fp, fm = (evaluate(model, x + t * w, theta, percent).forces for t in (0.0, h, -h))
-    stats.force_evaluations += 3
-    q = fx.forces(factor.apply(fx.forces((fp - 2.0 * f0 + fm) / (h * h)).reshape(-1))).reshape(w.shape)
+    fp = evaluate(model, x + h * d, theta, percent).forces
+    fm = evaluate(model, x - h * d, theta, percent).forces
+    stats.force_evaluations += 2
+    q = fx.forces(factor.apply(fx.forces((fp - 2.0 * f0 + fm) / (h * h)).reshape(-1))).reshape(d.shape)
     stats.linear_solves += 1
-    q -= (float(np.sum(q * w)) / float(np.sum(w * w))) * w
-    if not np.all(np.isfinite(q)) or np.linalg.norm(q) > np.linalg.norm(w):
-        return np.zeros_like(w)
+    if across:
+        q -= (float(np.sum(q * d)) / float(np.sum(d * d))) * d
+    if not np.all(np.isfinite(q)) or np.linalg.norm(q) > np.linalg.norm(d):
+        return np.zeros_like(d)
     return q
 
 
@@ -713,15 +737,7 @@ def _geodesic_acceleration(
     ``∇²E q = d²F/dt²`` along ``p`` (central differences, ``t = ±0.1``, with the same factorisation), so that
     ``∇E(x + p + ½q)`` vanishes to second order: the geodesic acceleration of Transtrum & Sethna (2012). Dropped
     (zero) when it is not small beside the step (``|q| > |p|``)."""
-    h = 0.1
-    fp = evaluate(model, x + h * p, ev.theta, percent).forces
-    fm = evaluate(model, x - h * p, ev.theta, percent).forces
-    stats.force_evaluations += 2
-    q = fx.forces(factor.apply(fx.forces((fp - 2.0 * ev.forces + fm) / (h * h)).reshape(-1))).reshape(p.shape)
-    stats.linear_solves += 1
-    if not np.all(np.isfinite(q)) or np.linalg.norm(q) > np.linalg.norm(p):
-        return np.zeros_like(p)
-    return q
+    return _curve_correction(model, factor, x, ev.theta, ev.forces, p, percent, stats, fx)
 
 
 def _residual_judges(

@@ -45,7 +45,7 @@ def transfer_positions(old: FoldMesh, old_positions: np.ndarray, new: FoldMesh) 
     return run_to_end(transfer_positions_steps(old, old_positions, new))
 
 
-def _rows(n_points: int, n_against: int) -> int:
+def _rows(n_against: int) -> int:
     """Points per unit: :data:`UNIT_PAIRS` pairs with ``n_against`` triangles or segments each."""
     return max(1, UNIT_PAIRS // max(n_against, 1))
 
@@ -64,7 +64,7 @@ def transfer_positions_steps(
     v0, v1 = b - a, c - a
     den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
     ok = np.abs(den) > 1e-15
-    rows = _rows(len(p), len(tri))
+    rows = _rows(len(tri))
     for lo in range(0, len(p), rows):
         if lo:
             yield
@@ -115,7 +115,7 @@ def creases_in_place_steps(old: FoldMesh, new: FoldMesh) -> Generator[None, None
     def nearest_old(points: np.ndarray) -> Generator[None, None, tuple[np.ndarray, np.ndarray]]:
         """Distance of each point from the old creases, and the nearest one."""
         dist, which = np.empty(len(points)), np.empty(len(points), dtype=np.int64)
-        rows = _rows(len(points), len(a))
+        rows = _rows(len(a))
         for start in range(0, len(points), rows):
             yield
             chunk = points[start : start + rows]

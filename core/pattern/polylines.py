@@ -202,15 +202,17 @@ def thin_dense_polylines(
     for i, (x, y) in enumerate(v.tolist()):
         grid.setdefault((int(x // cell), int(y // cell)), []).append(i)
 
-    def clear(a: int, b: int, inside: set[int]) -> bool:
-        """No vertex but those in ``inside`` (the stretch the chord replaces) within ``tolerance`` of the chord a–b."""
+    def clear(chain: np.ndarray, i: int, j: int) -> bool:
+        """No vertex within ``tolerance`` of the chord from ``chain[i]`` to ``chain[j]`` but those it replaces and
+        those its chain goes on through beside its ends (:func:`_beside`)."""
+        a, b, inside = int(chain[i]), int(chain[j]), _beside(v, chain, i, j, tolerance)
         lo, hi = np.minimum(v[a], v[b]) - tolerance, np.maximum(v[a], v[b]) + tolerance
         near = [
-            i
+            k
             for cx in range(int(lo[0] // cell), int(hi[0] // cell) + 1)
             for cy in range(int(lo[1] // cell), int(hi[1] // cell) + 1)
-            for i in grid.get((cx, cy), ())
-            if i not in inside
+            for k in grid.get((cx, cy), ())
+            if k not in inside
         ]
         if not near:
             return True
@@ -247,16 +249,13 @@ def thin_dense_polylines(
                 # tolerance of its ends (a polyline drawn finer than the tolerance: the next one always is, and
                 # nothing was thinned: 0.05 mm points gave 17,976 faces and 40 s); the rest of its chain is (the
                 # far side of a slot)
-                if best > i + 1 and not clear(int(chain[i]), int(chain[best]), _beside(v, chain, i, best, tolerance)):
+                if best > i + 1 and not clear(chain, i, best):
                     # the longest clear chord below it, by bisection (a chord clear of other vertices is so when
                     # shortened): one step at a time, a 150,000-point circle took 90,000 tests and 40 s
                     lo, hi = i + 1, best
                     while hi - lo > 1:
                         mid = (lo + hi) // 2
-                        if clear(int(chain[i]), int(chain[mid]), _beside(v, chain, i, mid, tolerance)):
-                            lo = mid
-                        else:
-                            hi = mid
+                        lo, hi = (mid, hi) if clear(chain, i, mid) else (lo, mid)
                     best = lo
                 if best > i + 1:
                     kept[pieces[i:best]] = False

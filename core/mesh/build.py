@@ -22,13 +22,13 @@ import numpy as np
 
 from .. import load_bpy, run_to_end
 from ..pattern.model import CreasePattern
+from ..pattern.polylines import connected_components
 from .earcut import ear_clip
 from .fold_mesh import FoldMesh
 from .needles import split_needle_creases_steps
 from .ruling import ruling_swaps_steps
 from .triangulate import (
     _outer_first,
-    connected_components,
     constrained_triangulation,
     face_loops,
     orient,

@@ -25,9 +25,10 @@ Cuts are split afterwards (:func:`split_cuts`, Origami Simulator's ``splitCuts``
 and each vertex is duplicated once per extra fan of triangles separated by cuts.
 
 Speed: everything after the backend works on half-edge arrays (:func:`half_edges`, h = 3·triangle + k, twins found
-by sorting): the Delaunay screening, the constraint check, region labelling (:func:`connected_components`), the
-toggles and the face loops (:func:`face_loops`) are vectorised; Python loops remain only for the (few) Lawson flips,
-the region breadth-first search and the chaining of boundary half-edges into loops.
+by sorting): the Delaunay screening, the constraint check, region labelling
+(:func:`..pattern.polylines.connected_components`), the toggles and the face loops (:func:`face_loops`) are
+vectorised; Python loops remain only for the (few) Lawson flips, the region breadth-first search and the chaining of
+boundary half-edges into loops.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ import numpy as np
 
 from .. import load_bpy
 from ..pattern.model import CreasePattern, PatternError
-from ..pattern.polylines import point_segment_distance
+from ..pattern.polylines import connected_components, point_segment_distance
 
 BACKENDS = ("auto", "triangle", "mathutils")
 
@@ -422,26 +423,6 @@ def _outer_first(points: np.ndarray, loops: list[list[int]]) -> list[list[int]]:
     areas = [_loop_area(points, lp) for lp in loops]
     outer = int(np.argmax(areas))
     return [loops[outer]] + [lp for k, lp in enumerate(loops) if k != outer]
-
-
-def connected_components(n: int, t1: np.ndarray, t2: np.ndarray) -> np.ndarray:
-    """Connected components of n nodes joined by the pairs (t1, t2): each node's label is the smallest node index of
-    its component (vectorised hooking of roots onto smaller labels with pointer jumping)."""
-    lab = np.arange(n)
-    while True:
-        l1, l2 = lab[t1], lab[t2]
-        m = np.minimum(l1, l2)
-        new = lab.copy()
-        np.minimum.at(new, l1, m)
-        np.minimum.at(new, l2, m)
-        while True:
-            jumped = new[new]
-            if np.array_equal(jumped, new):
-                break
-            new = jumped
-        if np.array_equal(new, lab):
-            return lab
-        lab = new
 
 
 @dataclass

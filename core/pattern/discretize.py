@@ -52,7 +52,13 @@ import numpy as np
 
 from .. import run_to_end
 from .model import CreaseCurve, CreasePattern, CurveSegment, PatternError
-from .polylines import flattened_curves, point_segment_distance, segment_foot, thin_dense_polylines
+from .polylines import (
+    connected_components,
+    flattened_curves,
+    point_segment_distance,
+    segment_foot,
+    thin_dense_polylines,
+)
 
 REFERENCE_SIZE_MM = 150.0
 """Sheet width the paper's parameters were chosen for (§4)."""
@@ -1675,21 +1681,13 @@ def _join_border_gaps(
     if not pairs:
         return edges, attrs
     # keep the pairs whose border pieces (joined at vertices) are left with no loose end: an outline closed
-    group = list(range(len(verts)))
-
-    def root(v: int) -> int:
-        while group[v] != v:
-            group[v] = group[group[v]]
-            v = group[v]
-        return v
-
-    for a, b in edges[b_idx].tolist():
-        group[root(a)] = root(b)
-    for a, b in pairs:
-        group[root(int(loose[a]))] = root(int(loose[b]))
+    ends = np.array(pairs, dtype=np.int64)
+    group = connected_components(
+        len(verts), np.r_[edges[b_idx, 0], loose[ends[:, 0]]], np.r_[edges[b_idx, 1], loose[ends[:, 1]]]
+    )
     paired = {x for pair in pairs for x in pair}
-    still_open = {root(int(loose[x])) for x in range(len(loose)) if x not in paired}
-    pairs = [(a, b) for a, b in pairs if root(int(loose[a])) not in still_open]
+    still_open = {int(group[loose[x]]) for x in range(len(loose)) if x not in paired}
+    pairs = [(a, b) for a, b in pairs if int(group[loose[a]]) not in still_open]
     if not pairs:
         return edges, attrs
     new_edges = np.array([[loose[a], loose[b]] for a, b in pairs], dtype=edges.dtype)

@@ -16,6 +16,27 @@ import numpy as np
 from .model import CreaseCurve, CreasePattern, CurveSegment
 
 
+def connected_components(n: int, t1: np.ndarray, t2: np.ndarray) -> np.ndarray:
+    """Connected components of n nodes joined by the pairs (t1, t2): each node's label is the smallest node index of
+    its component (vectorised hooking of roots onto smaller labels with pointer jumping). Here, the pattern's stage,
+    so the polylines' chains and the border's gaps use it as the mesh's regions and pieces do."""
+    lab = np.arange(n)
+    while True:
+        l1, l2 = lab[t1], lab[t2]
+        m = np.minimum(l1, l2)
+        new = lab.copy()
+        np.minimum.at(new, l1, m)
+        np.minimum.at(new, l2, m)
+        while True:
+            jumped = new[new]
+            if np.array_equal(jumped, new):
+                break
+            new = jumped
+        if np.array_equal(new, lab):
+            return lab
+        lab = new
+
+
 def segment_foot(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise, the point of segment ``a → b`` nearest ``p`` (``a`` for a segment of no length)."""
     ab = b - a
@@ -125,20 +146,8 @@ def flattened_curves(
     mid, k1, k2 = mid[joint], k1[joint], k2[joint]
     if len(mid) == 0:
         return out
-    parent = list(range(m))  # union-find of the segments joined at a chain's vertices
-
-    def root(a: int) -> int:
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    for a, b in zip(k1.tolist(), k2.tolist(), strict=True):
-        ra, rb = root(a), root(b)
-        if ra != rb:
-            parent[max(ra, rb)] = min(ra, rb)
     chained = np.unique(np.concatenate([k1, k2]))
-    label = np.array([root(k) for k in chained.tolist()], dtype=np.int64)
+    label = connected_components(m, k1, k2)[chained]  # the segments joined at a chain's vertices
     is_joint = np.zeros(n, dtype=bool)
     is_joint[mid] = True
     for chain in np.split(chained[np.argsort(label, kind="stable")], np.flatnonzero(np.diff(np.sort(label))) + 1):

@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from ..mesh.fold_mesh import FoldMesh, corner_angles
-from ..mesh.triangulate import connected_components
+from ..pattern.polylines import connected_components
 from .constraints import rigid_fit
 
 SHAPE_DEG = 30.0

@@ -447,18 +447,18 @@ def local_coordinates(ob: bpy.types.Object) -> np.ndarray:
     return co.reshape(-1, 3).astype(np.float64)
 
 
-def local_offset(ob: bpy.types.Object) -> np.ndarray:
+def local_offset(ob: bpy.types.Object, co: np.ndarray | None = None) -> np.ndarray:
     """The offset (BU) of ``ob``'s vertices from the engine's positions ÷ unit (:data:`OFFSET_KEY`), with any move
     of its origin since the last write added: the move of the probe vertices, where most of them moved alike (an
     origin shift moves all). Reads only: a write records it (:func:`remember_local`), so a cancelled job leaves the
-    object's properties as they were."""
+    object's properties as they were. ``co``: its :func:`local_coordinates`, if the caller has them already."""
     offset = np.array(ob.get(OFFSET_KEY, (0.0, 0.0, 0.0)), dtype=np.float64)
     probe = ob.get(PROBE_KEY)
     n = len(ob.data.vertices)
     idx = _probe_indices(n)
     if probe is None or len(probe) != 3 * len(idx) or n == 0:
         return offset
-    co = local_coordinates(ob)
+    co = local_coordinates(ob) if co is None else co
     moves = co[idx] - np.array(probe, dtype=np.float64).reshape(-1, 3)
     shift = np.median(moves, axis=0)
     size = float(np.ptp(co, axis=0).max()) or 1.0
@@ -503,8 +503,8 @@ def restore_origin_state(ob: bpy.types.Object, state: dict[str, list[float] | No
 
 def engine_positions(ob: bpy.types.Object, scene: bpy.types.Scene | None = None) -> np.ndarray:
     """``ob``'s vertex positions in the engine's frame (``(n, 3)`` mm): as stored, less the origin offset."""
-    offset = local_offset(ob)
-    return (local_coordinates(ob) - offset) * mm_per_unit(scene)
+    co = local_coordinates(ob)  # read once: the offset is measured on the same vertices
+    return (co - local_offset(ob, co)) * mm_per_unit(scene)
 
 
 def update_positions(

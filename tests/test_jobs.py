@@ -277,6 +277,59 @@ def test_a_frame_that_playback_leaves_unconverged_says_so(folded, extension, mon
     assert props.last_message == "an earlier warning"
 
 
+def test_a_frame_the_user_steps_to_folds_in_slices_and_ends_converged(folded, extension, monkeypatch):
+    """In the interface a frame change of an unbaked keyframed fold held Blender for the whole solve (200–460 ms a
+    frame on a 3,000-face pleat) and showed a frame cut short at 12 iterations. Now a frame the user steps or
+    scrubs to (no playback, no render) is a job: one slice in the handler, the rest on a timer, ending in the bake's
+    converged frame; the next frame change, a Bake or its Cancel button supersede it, and a superseded or cancelled
+    frame leaves the shape as it was and nothing cached."""
+    ob, _, _ = folded
+    scene = bpy.context.scene
+    timeline = mod(extension, "scene.timeline")
+    jobs = mod(extension, "scene.jobs")
+    solver_mod = mod(extension, "core.solve.solver")
+    scene.frame_start, scene.frame_end = 1, 9
+    keyframe_percent(ob, {1: 10.0, 9: 90.0})
+    monkeypatch.setattr(timeline, "interactive", lambda: True)
+    monkeypatch.setattr(jobs, "SLICE_MS", 0.0)  # one Newton iteration (or model unit) per slice
+    before = positions_mm(ob)
+    scene.frame_set(5)
+    job5 = jobs.running_job(ob.name)
+    assert job5 is not None and job5.kind == "folding frame 5" and job5.live and job5.slices == 1
+    assert timeline.driven(ob)  # its own frame job does not stop the next frame change
+    scene.frame_set(7)  # supersedes frame 5's job: its preview restored, nothing cached for frame 5
+    assert job5.state == "cancelled"
+    job7 = jobs.running_job(ob.name)
+    assert job7.kind == "folding frame 7" and 5 not in timeline.cache_for(ob).frames
+    slices = 1
+    while timeline.drive_frames():
+        slices += 1
+        assert slices < 500
+    assert job7.state == "done" and slices > 3
+    cache = timeline.cache_for(ob)
+    entry = cache.frames[7]
+    assert entry.converged  # a bake's frame: from the natural path, the static fold at its percent, exactly
+    static = solver_mod.Solver(cache.mesh, cache.solver(ob.curved_fold_mesh).settings).solve(timeline.percent_at(ob, 7))
+    assert np.array_equal(entry.positions, static.positions)
+    np.testing.assert_allclose(positions_mm(ob), entry.positions, atol=1e-3)
+    scene.frame_set(7)  # solved: shown at once, no job
+    assert jobs.running_job(ob.name) is None
+    # The Cancel button (or Esc's equivalent for a timer job) leaves the shape of frame 7 as it was.
+    shown = positions_mm(ob)
+    scene.frame_set(3)
+    job3 = jobs.running_job(ob.name)
+    assert job3 is not None and not np.array_equal(positions_mm(ob), shown)
+    assert bpy.ops.curved_fold.cancel_job(owner=ob.name) == {"FINISHED"}
+    assert job3.state == "cancelled" and np.array_equal(positions_mm(ob), shown)
+    assert not timeline.drive_frames()
+    # A Bake supersedes a running frame job.
+    scene.frame_set(2)
+    job2 = jobs.running_job(ob.name)
+    assert job2 is not None
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"} and job2.state == "cancelled"
+    assert not np.array_equal(before, positions_mm(ob))
+
+
 def test_live_keeps_the_bake_marked_out_of_date(folded, extension):
     ob, _, crease = folded
     scene = bpy.context.scene

@@ -73,9 +73,13 @@ def self_intersecting_faces(mesh: FoldMesh, positions: np.ndarray, crossing: np.
 
 def state_report(result: FoldResult) -> dict[str, Any]:
     """Which equilibrium was reached: its energy, whether it is a stable minimum (no negative pivot of the exact
-    Hessian), and where along the folding path another state branches off (a saddle the solver stepped out of)."""
+    Hessian), and where along the folding path another state branches off (a saddle the solver stepped out of). An
+    unconverged state is no equilibrium, whatever its pivots (a designer's spiral stopped at the iteration cap with
+    residual 1.8e-3 read "stable minimum")."""
     n = result.negative_pivots
-    if n is None:
+    if not result.converged:  # a stopped solve is on its way somewhere: its pivots say nothing of an equilibrium
+        state = f"not an equilibrium: the solve stopped before it converged (energy {result.energy:.6g})"
+    elif n is None:
         state = "not measured"
     elif n == 0:
         state = f"stable minimum (energy {result.energy:.6g})"

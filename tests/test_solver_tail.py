@@ -242,6 +242,11 @@ def test_static_fold_reports_the_state_and_where_another_branches_off():
     assert "passed a saddle near 0 %" in report["other_state_near"]
     plain = state_report(Solver(grid_mesh(3, 3, creases={(1, 5): ("V", 90.0)}), SolverSettings()).solve(0.6))
     assert plain["state"].startswith("stable minimum") and "other_state_near" not in plain
+    # stopped at the iteration cap: no equilibrium, whatever the pivots of where it stopped say
+    capped = Solver(grid_mesh(3, 3, creases={(1, 5): ("V", 90.0)}), SolverSettings(max_iterations=1)).solve(0.6)
+    assert not capped.converged and capped.negative_pivots == 0
+    report = state_report(capped)
+    assert report["state"] == f"not an equilibrium: the solve stopped before it converged (energy {capped.energy:.6g})"
 
 
 def test_gauss_newton_assembly_equals_its_matrix_free_product():

@@ -44,8 +44,9 @@ class SolverSettings:
     """Material and solver settings; defaults are Origami Simulator's (reference §3.1).
 
     ``tolerance`` is the scale-free residual (max nodal force ÷ hinge force scale). ``max_iterations`` caps Newton
-    iterations (of a whole continuation; 500: a clef rolling up at a 1 mm interval needs 217, at 0.5 mm 380, and
-    the path is long, not stuck — docs/solver.md, "One natural state"); ``max_steps`` and ``time_limit``
+    iterations (of a whole continuation; 1000: a clef rolling up at a 1 mm interval needs 217, at 0.5 mm 380, and
+    the path is long, not stuck — docs/solver.md, "One natural state"; a designer's crumpling curved Miura grids
+    and a four-turn spiral at 180° need 501–1,075); ``max_steps`` and ``time_limit``
     (seconds, ``None`` = no limit) cap the faithful integrator.
     A fast solve from the flat sheet folds by continuation: fold percent steps of at most ``continuation_step``,
     each warm-started from the last (intermediate steps solved to ``continuation_tolerance``, the last to
@@ -59,7 +60,7 @@ class SolverSettings:
     face_stiffness: float = 0.2
     damping: float = 0.45
     tolerance: float = 1e-6
-    max_iterations: int = 500
+    max_iterations: int = 1000
     max_steps: int = 200_000
     time_limit: float | None = None
     isometric: bool = False

@@ -12,13 +12,14 @@ to that frame's percent — the design's "solver stepped per frame".
   The cache is dropped when the stored mesh changes (re-fold, live edit) and its entries are not reused when the
   solver settings differ. Bakes read it and fill it (``bake.bake_job``): a converged frame is solved once.
 * :func:`on_frame_change` (``frame_change_post``) folds each animated fold object that is not showing a current
-  bake and has no job running. During playback, a render and in background mode it is synchronous, as Blender
-  needs the frame's shape before it draws or renders it (capped at :data:`FRAME_MAX_ITERATIONS`). A frame the user
-  steps or scrubs to is a job instead (:func:`frame_job`): one slice of ``jobs.SLICE_MS`` in the handler, the rest
-  on a timer (:func:`drive_frames`) while the sheet folds in the viewport, solved as a bake solves it (converged,
-  the bake's frame); a newer frame change, a Re-fold or a Bake supersedes it, and its Cancel button or a save
-  leave the shape as it was. Before this, every frame change of a 3,000-face pleat held Blender for 200–460 ms and
-  showed a frame cut short at 12 iterations.
+  bake and has no job running. During playback, a render, in background mode and for a ``frame_set`` called from
+  Python (a script, an exporter) it is synchronous, as the caller needs the frame's shape before it draws, renders
+  or reads it (capped at :data:`FRAME_MAX_ITERATIONS`). A frame the user steps or scrubs to is a job instead
+  (:func:`frame_job`): one slice of ``jobs.SLICE_MS`` in the handler, the rest on a timer (:func:`drive_frames`)
+  while the sheet folds in the viewport, solved as a bake solves it (converged, the bake's frame); a newer frame
+  change, a Re-fold or a Bake supersedes it, and its Cancel button or a save leave the shape as it was. Before
+  this, every frame change of a 3,000-face pleat held Blender for 200–460 ms and showed a frame cut short at 12
+  iterations.
 
 Quasi-static (equilibrium per frame, the fast solver) is what playback solves; the dynamic bake mode depends on
 the history of every earlier frame and is only baked.
@@ -27,6 +28,7 @@ the history of every earlier frame and is only baked.
 from __future__ import annotations
 
 import hashlib
+import sys
 from collections.abc import Generator
 from dataclasses import dataclass
 
@@ -316,9 +318,25 @@ _frame_jobs: dict[str, jobs.Job] = {}
 
 
 def interactive() -> bool:
-    """Whether a frame change may leave its solve to a timer: a window shows the scene, no animation plays and no
-    render runs — a render job, or a render operator running modal in a window (Render Animation, Viewport Render
-    Animation, which steps the frames itself): those need each frame's shape before they go on."""
+    """Whether a frame change may leave its solve to a timer: the user changed the frame (Blender called the handler
+    from its own code: a key press, a click or drag in the timeline — not a script's, an exporter's or a ``bpy.ops``
+    call's ``frame_set``, which reads the mesh right after it), a window shows the scene, no animation plays and no
+    render runs (a render job, or a render operator running modal in a window: Render Animation, Viewport Render
+    Animation, which steps the frames itself). Those need each frame's shape before they go on."""
+    return not _called_from_python() and _ui_idle()
+
+
+def _called_from_python() -> bool:
+    """Whether Python code is below :func:`on_frame_change` on the stack (it was called by a ``frame_set`` or a
+    ``bpy.ops`` call in Python, not by Blender for the user's own frame change). True outside the handler."""
+    frame = sys._getframe()
+    while frame is not None and frame.f_code is not on_frame_change.__code__:
+        frame = frame.f_back
+    return frame is None or frame.f_back is not None
+
+
+def _ui_idle() -> bool:
+    """A window shows the scene, no animation plays and no render runs (see :func:`interactive`)."""
     if bpy.app.background or bpy.app.is_job_running("RENDER"):
         return False
     wm = bpy.context.window_manager

@@ -330,6 +330,37 @@ def test_a_frame_the_user_steps_to_folds_in_slices_and_ends_converged(folded, ex
     assert not np.array_equal(before, positions_mm(ob))
 
 
+def test_a_frame_change_from_python_stays_synchronous(folded, extension, monkeypatch):
+    """A script's, an exporter's or a ``bpy.ops`` call's ``frame_set`` reads the mesh right after it: such a frame
+    change folds the frame before it returns, even in the interface. Only a frame change Blender makes for the user
+    (the handler called from Blender's own code, nothing of Python below it) is left to a timer."""
+    import _thread
+    import threading
+
+    ob, _, _ = folded
+    scene = bpy.context.scene
+    timeline = mod(extension, "scene.timeline")
+    jobs = mod(extension, "scene.jobs")
+    keyframe_percent(ob, {1: 10.0, 9: 90.0})
+    asked = []
+    monkeypatch.setattr(timeline, "_ui_idle", lambda: asked.append(True) or True)
+    scene.frame_set(5)  # from Python: folded at once, no job, the idle window not even asked about
+    assert jobs.running_job(ob.name) is None and asked == []
+    assert timeline.cache_for(ob).frames[5].converged
+    assert timeline._called_from_python()
+    # Called as Blender calls it, with no Python frame below the handler (a thread started from C): left to a timer.
+    seen, looked, pause = [], [], threading.Event()
+    monkeypatch.setattr(timeline, "_ui_idle", lambda: seen.append(timeline._called_from_python()) or False)
+    monkeypatch.setattr(timeline, "driven", lambda o: looked.append(o.name) and False)  # touch nothing
+    n_objects = len(scene.objects)
+    _thread.start_new_thread(timeline.on_frame_change, (scene,))
+    for _ in range(500):  # until the handler has looked at every object: it has nothing left to do
+        if len(looked) == n_objects:
+            break
+        pause.wait(0.01)
+    assert seen == [False] and len(looked) == n_objects
+
+
 def test_live_keeps_the_bake_marked_out_of_date(folded, extension):
     ob, _, crease = folded
     scene = bpy.context.scene

@@ -81,14 +81,24 @@ def unwrapped_fold_angles(
     The geometry gives angles in (−180°, 180°], so a valley driven past flat (199°) reads −161°, the wrong sign for
     its assignment; the solver keeps them unwrapped, and this follows the frames as it does. (An export of the
     add-on's frames wrote such valleys as −161° to −168° where the command line writes the solver's 180°.)"""
-    last = np.zeros(len(mesh.edges)) if start is None else np.nan_to_num(np.asarray(start, dtype=float))
-    out = []
-    for positions in frames:
-        a = fold_angles(mesh, positions)
-        a = a + 360.0 * np.round((last - a) / 360.0)
-        out.append(a)
-        last = np.where(np.isfinite(a), a, last)
-    return out
+    follow = AngleFollower(mesh, start)
+    return [follow(positions) for positions in frames]
+
+
+class AngleFollower:
+    """:func:`unwrapped_fold_angles` one frame at a time: each call takes the next frame's positions (mm) and returns
+    its unwrapped angles, so an export job can measure a frame per unit of work (60 frames of a 3,000-face pattern
+    took 63 ms in one call)."""
+
+    def __init__(self, mesh: FoldMesh, start: np.ndarray | None = None):
+        self.mesh = mesh
+        self.last = np.zeros(len(mesh.edges)) if start is None else np.nan_to_num(np.asarray(start, dtype=float))
+
+    def __call__(self, positions: np.ndarray) -> np.ndarray:
+        a = fold_angles(self.mesh, positions)
+        a = a + 360.0 * np.round((self.last - a) / 360.0)
+        self.last = np.where(np.isfinite(a), a, self.last)
+        return a
 
 
 def edge_strain(mesh: FoldMesh, positions: np.ndarray) -> np.ndarray:

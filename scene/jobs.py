@@ -69,11 +69,28 @@ class ObjectHandle:
         return ob
 
 
+STAGE_TEXT = {
+    "start": "starting",
+    "read": "reading the crease pattern file",
+    "discretise": "discretising the crease curves",
+    "mesh": "meshing the pattern",
+    "model": "building the bar-and-hinge model",
+    "figures": "measuring the fold (strain, warp, self-intersection)",
+    "setup": "preparing the export scene",
+    "export": "Blender's exporter is writing the file",
+    "write": "writing the file",
+}
+"""The status-bar line of the stages that say no more than their name (:meth:`Progress.text`)."""
+
+
 @dataclass
 class Progress:
     """Where a job is: its ``stage`` ("start", "read" (an import), "discretise", "mesh", "model", "solve", "figures",
-    "frame"), the solver iteration and residual, the frame k of n (bakes), the fraction done, and positions (mm)
-    worth showing (or None)."""
+    "frame", and an export's "encode", "setup", "export", "write"), the solver iteration and residual, the frame k
+    of n (bakes, exports), the fraction done, and positions (mm) worth showing (or None).
+
+    ``alone``: the unit that follows runs in a slice of its own (:func:`run_slice` ends the slice before it): a
+    single call into Blender's own exporter, which cannot be split, is not added to a slice's other work."""
 
     stage: str
     iteration: int = 0
@@ -82,21 +99,14 @@ class Progress:
     n_frames: int = 0
     fraction: float = 0.0
     positions: np.ndarray | None = None
+    alone: bool = False
 
     def text(self, elapsed_s: float = 0.0) -> str:
         """One status-bar line: iteration and residual, or frame k of n with the time left."""
-        if self.stage == "start":
-            return "starting"
-        if self.stage == "read":
-            return "reading the crease pattern file"
-        if self.stage == "discretise":
-            return "discretising the crease curves"
-        if self.stage == "mesh":
-            return "meshing the pattern"
-        if self.stage == "model":
-            return "building the bar-and-hinge model"
-        if self.stage == "figures":
-            return "measuring the fold (strain, warp, self-intersection)"
+        if self.stage in STAGE_TEXT:
+            return STAGE_TEXT[self.stage]
+        if self.stage == "encode" and self.n_frames:
+            return f"encoding frame {self.frame} of {self.n_frames}"
         if self.stage == "frame" and self.n_frames:
             left = ""
             if self.fraction > 0 and elapsed_s > 0:
@@ -415,6 +425,8 @@ def run_slice(job: Job, budget_ms: float | None = None) -> bool:
                 progress = next(job.steps)
             except StopIteration as done:
                 commit = done.value
+                unit = job.progress.stage  # the last unit did work too (an export's write): its time counts
+                job.unit_ms[unit] = max(job.unit_ms.get(unit, 0.0), 1e3 * (time.perf_counter() - tu))
                 if ran and callable(commit):
                     # the commit writes the scene (an import's objects: ~50 ms for 2,254 lines): in a slice of its
                     # own, not after this slice's units (an import's slice reached 118 ms)
@@ -432,7 +444,7 @@ def run_slice(job: Job, budget_ms: float | None = None) -> bool:
             # the next unit, as long as the longest of its kind so far (or as this one, if it is the first), would
             # overrun: a bake's frame units vary (a warm iteration 20 ms, the one after a grid point 60 ms), and
             # predicting from the last unit let slices reach 110 ms
-            if 1e3 * (now - t0) + job.unit_ms.get(progress.stage, unit_ms) >= budget_ms:
+            if progress.alone or 1e3 * (now - t0) + job.unit_ms.get(progress.stage, unit_ms) >= budget_ms:
                 break
         if commit is None:
             if shown is not None and job.preview is not None:
@@ -485,10 +497,12 @@ def hide_previews() -> None:
     (:func:`show_previews` puts the previews back after it). Saved with a bake running, the file held its muted
     keys and a partial frame; saved during a rebuild, the object pointed at the temporary mesh and the bake's keys
     were not in the file (a designer session's Ctrl+S). A job whose object is in Edit Mode is cancelled: its
-    preview could not be shown again there (:func:`cancel` takes the object out of Edit Mode to restore it)."""
+    preview could not be shown again there (:func:`cancel` takes the object out of Edit Mode to restore it). So is
+    a job whose preview holds temporary datablocks (an export's scene: ``holds_datablocks``), which the file
+    would otherwise keep."""
     for job in list(_jobs.values()):
         if job.running and job.preview is not None:
-            if _in_edit_mode(job) is not None:
+            if _in_edit_mode(job) is not None or getattr(job.preview, "holds_datablocks", False):
                 cancel(job)
             else:
                 job.preview.restore()

@@ -8,12 +8,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import bpy
-import numpy as np
-from bpy.props import EnumProperty, StringProperty
+from bpy.props import BoolProperty, EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
 from ..scene import bake, export, folding, mesh_object, source_state
 from . import _common
+from .job_modal import JobOperator
 
 FORMATS = (
     ("GLB", "glTF Binary (.glb)", "Folded mesh; with a bake, morph targets and the fold animation", ".glb"),
@@ -26,50 +26,15 @@ _EXT = {f[0]: f[3] for f in FORMATS}
 _FORMAT_OF = {f[3]: f[0] for f in FORMATS}
 
 
-def folded_frames(ob: bpy.types.Object) -> tuple[list[int], list[np.ndarray]]:
-    """Baked frames of ``ob`` and their positions (mm), or ``([], [current positions])`` without a bake."""
-    scale = mesh_object.mm_per_unit()
-    me = ob.data
-    n = len(me.vertices)
-    frames = bake.baked_frames(ob)
-    if frames:
-        out = []
-        for f in frames:
-            co = np.empty(3 * n, dtype=np.float32)
-            me.shape_keys.key_blocks[bake.key_name(f)].points.foreach_get("co", co)
-            out.append(co.reshape(-1, 3).astype(np.float64) * scale)
-        return frames, out
-    co = np.empty(3 * n, dtype=np.float32)
-    me.attributes["position"].data.foreach_get("vector", co)
-    return [], [co.reshape(-1, 3).astype(np.float64) * scale]
+class CURVED_FOLD_OT_export_folded(JobOperator, bpy.types.Operator, ExportHelper):
+    """Export the active folded mesh (OBJ, STL, glTF, FOLD, .blend).
 
-
-def current_frame_positions(ob: bpy.types.Object, context) -> np.ndarray:
-    """Positions (mm) of ``ob``'s own vertices at the current frame: the shape-key mix (animated values) without
-    the modifiers, which the export applies itself (``export.export_folded_file(modifiers_from=ob)``)."""
-    me = ob.data
-    n = len(me.vertices)
-    co = np.empty(3 * n, dtype=np.float32)
-    me.attributes["position"].data.foreach_get("vector", co)
-    out = co.reshape(-1, 3).astype(np.float64)
-    keys = me.shape_keys
-    if keys is not None and keys.use_relative and len(keys.key_blocks) > 1:
-        evaluated = keys.evaluated_get(context.evaluated_depsgraph_get())
-
-        def key_co(kb) -> np.ndarray:
-            buf = np.empty(3 * n, dtype=np.float32)
-            kb.points.foreach_get("co", buf)
-            return buf.reshape(-1, 3).astype(np.float64)
-
-        out = key_co(keys.reference_key)
-        for kb, ev in zip(keys.key_blocks[1:], evaluated.key_blocks[1:], strict=True):
-            if not kb.mute and ev.value != 0.0:
-                out += ev.value * (key_co(kb) - key_co(kb.relative_key))
-    return out * mesh_object.mm_per_unit(context.scene)
-
-
-class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
-    """Export the active folded mesh (OBJ, STL, glTF, FOLD, .blend)"""
+    From the file browser it runs as a job in slices (``scene.export.export_job``, the ``JobOperator`` pattern):
+    progress in the status bar and the sidebar, Esc cancels and leaves the scene and the files as they were. A script
+    (``execute``) runs the same job to its end in one call. Every unit of work stays near ``jobs.SLICE_MS`` except one:
+    Blender's own exporter (glTF, OBJ, STL, .blend write) is a single call that cannot be split; at 3,000 faces with
+    60 baked frames the glTF exporter's unit takes ~200-250 ms of CPU, the STL/OBJ one ~10-20 ms (docs/benchmarks.md).
+    FOLD is written by the add-on: its longest unit (reading the flat pattern) is ~40 ms."""
 
     bl_idname = "curved_fold.export_folded"
     bl_label = "Export Folded Mesh"
@@ -78,6 +43,7 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
         "frame per baked frame, or a .blend with the baked object"
     )
     bl_options = {"REGISTER"}
+    own_errors = (OSError, ImportError)
 
     filename_ext = ".glb"
     filter_glob: StringProperty(default="*.glb;*.obj;*.stl;*.fold;*.blend", options={"HIDDEN"})
@@ -121,12 +87,36 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
             return True
         return False
 
-    def execute(self, context):
-        with _common.object_mode(context):
-            return self._export(context)
+    browsed: BoolProperty(
+        name="From the File Browser",
+        description="Chosen in the file browser: export as a job in slices (Esc cancels), not in one call",
+        default=False,
+        options={"HIDDEN", "SKIP_SAVE"},
+    )
 
-    def _export(self, context):
-        ob = context.active_object
+    _reedit = ""
+    """The object that was in Edit Mode when the modal job started: back in it when the job ends."""
+
+    def invoke(self, context, event):
+        self.browsed = True
+        return ExportHelper.invoke(self, context, event)
+
+    def execute(self, context):
+        self._choose_format()
+        if self.browsed and not bpy.app.background and context.window is not None:
+            ob = context.active_object
+            self._reedit = ob.name if ob.mode == "EDIT" else ""  # the job reads the mesh's arrays, empty there
+            if self._reedit:
+                bpy.ops.object.mode_set(mode="OBJECT")
+            result = self.start_modal(context)  # after the file browser: in slices, as Fold and Bake
+            if "RUNNING_MODAL" not in result:
+                self._back_to_edit_mode(context)
+            return result
+        with _common.object_mode(context):
+            return JobOperator.execute(self, context)
+
+    def _choose_format(self) -> None:
+        """The format from a typed extension (unless given), the file name given the format's extension."""
         asked = self.filepath
         typed = _FORMAT_OF.get(Path(self.filepath).suffix.lower())
         if typed is not None and not self.properties.is_property_set("file_format"):
@@ -135,42 +125,40 @@ class CURVED_FOLD_OT_export_folded(bpy.types.Operator, ExportHelper):
             self.report(
                 {"WARNING"}, f"'{Path(asked).name}' written as '{Path(self.filepath).name}' ({self.file_format})"
             )
-        try:
-            mesh = mesh_object.read_fold_mesh(ob)
-            frames, positions = folded_frames(ob)
-            suffix = _EXT[self.file_format]
-            kwargs = {"name": ob.name, "fps": context.scene.render.fps, "modifiers_from": ob}
-            if suffix in (".obj", ".stl"):
-                positions = [current_frame_positions(ob, context)]
-                if self.unit != "AUTO":
-                    kwargs["unit"] = self.unit.lower()
-            elif suffix == ".fold":
-                from ..core.metrics import measures as metrics
 
-                # the solver's unwrapped angles of the last fold start an unbaked frame (a valley past flat is
-                # 199°, not −161°); baked frames are followed from the flat sheet
-                start = None if frames else mesh_object.simulated_fold_angles(ob)
-                kwargs = {"fold_angles": metrics.unwrapped_fold_angles(mesh, positions, start)}
-            else:
-                kwargs["frame_numbers"] = frames or None
-            path = export.export_folded_file(self.filepath, mesh, positions, **kwargs)
-        except (*folding.engine_errors(), OSError, ImportError) as exc:
-            self.report({"ERROR"}, f"Export of '{ob.name}' failed: {exc}")
-            return {"CANCELLED"}
-        if frames and bake.is_stale(ob):  # the viewport shows a newer fold than the frames written
+    def make_job(self, context):
+        ob = context.active_object
+        self.failure = f"Export of '{ob.name}' failed"
+        unit = self.unit.lower() if self.file_format in ("OBJ", "STL") and self.unit != "AUTO" else None
+        return export.export_job(ob, self.filepath, unit=unit, scene=context.scene)
+
+    def _end_ui(self, context) -> None:
+        JobOperator._end_ui(self, context)
+        self._back_to_edit_mode(context)
+
+    def _back_to_edit_mode(self, context) -> None:
+        ob = context.active_object
+        if self._reedit and ob is not None and ob.name == self._reedit and ob.mode == "OBJECT":
+            bpy.ops.object.mode_set(mode="EDIT")
+        self._reedit = ""
+
+    def done(self, context, result):
+        ob = bpy.data.objects.get(self._job.owner) if self._job is not None else context.active_object
+        name, n, path = (ob.name if ob is not None else "?"), result.n_frames, result.path
+        if ob is not None and result.baked and bake.is_stale(ob):  # the viewport shows a newer fold than written
             self.report(
                 {"WARNING"},
-                f"Exported '{ob.name}' ({len(positions)} baked frame(s)) to {path}, but the bake is out of date: "
+                f"Exported '{name}' ({n} baked frame(s)) to {path}, but the bake is out of date: "
                 "the fold changed since it was baked; bake again to export what the viewport shows",
             )
-        elif source_state.sources_changed(ob, context.scene):  # curves edited with Live off since the fold
+        elif ob is not None and source_state.sources_changed(ob, context.scene):  # curves edited with Live off
             self.report(
                 {"WARNING"},
-                f"Exported '{ob.name}' ({len(positions)} frame(s)) to {path}, but its source curves changed since "
+                f"Exported '{name}' ({n} frame(s)) to {path}, but its source curves changed since "
                 "the fold: Re-fold (and Bake again) to export them",
             )
         else:
-            self.report({"INFO"}, f"Exported '{ob.name}' ({len(positions)} frame(s)) to {path}")
+            self.report({"INFO"}, f"Exported '{name}' ({n} frame(s)) to {path}")
         return {"FINISHED"}
 
 

@@ -20,6 +20,9 @@ class JobOperator:
     _timer = None
     _job: jobs.Job | None = None
     failure = "failed"
+    own_errors: tuple[type[BaseException], ...] = ()
+    """Errors, besides the engine's, that a job of this operator reports with their own message (an export's
+    ``OSError``: a full disk, a missing folder), not as "the scene changed while it ran"."""
 
     def make_job(self, context) -> jobs.Job:  # pragma: no cover - every subclass defines it
         raise NotImplementedError
@@ -36,7 +39,7 @@ class JobOperator:
         try:
             job = jobs.start(self.make_job(context))
             result = jobs.run_to_end(job)
-        except folding.engine_errors() as exc:
+        except (*folding.engine_errors(), *self.own_errors) as exc:
             return self._fail(exc)
         return self.done(context, result) or {"FINISHED"}
 
@@ -91,7 +94,8 @@ class JobOperator:
             ended = jobs.run_slice(job)
         except Exception as exc:  # noqa: BLE001 - the engine's errors, or the user changed the scene under the job:
             self._end_ui(context)  # one line; the timer and status text removed, the preview restored by run_slice
-            return self._fail(RuntimeError(folding.failure_reason(exc)))
+            reason = str(exc) if isinstance(exc, self.own_errors) else folding.failure_reason(exc)
+            return self._fail(RuntimeError(reason))
         if not ended:
             self._status(context)
             return {"RUNNING_MODAL"}

@@ -13,16 +13,18 @@ FOLD and SVG keep millimetres.
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator, Sequence
+from collections.abc import Generator, Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 import bpy
 import numpy as np
 
-from ..core.io.atomic import atomic_output
+from ..core.io.atomic import atomic_output, atomic_write_text
 from ..core.io.svg import SAMPLED_ATTRIBUTE, SAMPLED_VALUE
 from ..core.mesh.fold_mesh import FoldMesh
+from .jobs import Job, ObjectHandle, Progress
 
 BLENDER_SUFFIXES = (".obj", ".stl", ".glb", ".gltf", ".blend")
 """Suffixes written through Blender's own exporters."""
@@ -42,33 +44,52 @@ def _frames_array(frames: np.ndarray | Sequence[np.ndarray], n: int) -> np.ndarr
     return arr
 
 
-@contextlib.contextmanager
-def temporary_scene(name: str = "Curved Fold Export") -> Iterator[bpy.types.Scene]:
-    """A new scene made the window's scene for the duration; the user's scene comes back and the temporary one
-    (with every object, mesh, curve, shape key and action created in it) is deleted afterwards."""
-    before = {
-        "objects": set(bpy.data.objects),
-        "meshes": set(bpy.data.meshes),
-        "curves": set(bpy.data.curves),
-        "actions": set(bpy.data.actions),
-        "materials": set(bpy.data.materials),
-    }
-    window = bpy.context.window
-    previous = window.scene if window is not None else None
-    scene = bpy.data.scenes.new(name)
-    try:
-        if window is not None:
-            window.scene = scene
-        yield scene
-    finally:
-        if window is not None and previous is not None:
-            window.scene = previous
-        for kind, old in before.items():
+class Scratch:
+    """The temporary scene of an export and every datablock made for it, kept from one unit of an export job to the
+    next and removed at its end (also on failure or cancel): the user's scene, selection and active object are never
+    touched.
+
+    :meth:`unit` runs one unit of work with the temporary scene as the window's (the exporters and the depsgraph
+    read the context's scene) and the user's scene back afterwards, before the window redraws, and records what the
+    unit made. Only the units' own datablocks are recorded: something the user makes between two slices of the job
+    is not removed with the export's (a difference of ``bpy.data`` over the whole job would take it)."""
+
+    KINDS = ("objects", "meshes", "curves", "actions", "materials")
+
+    def __init__(self, name: str = "Curved Fold Export"):
+        self.name = name
+        self.scene: bpy.types.Scene | None = None
+        self.made: dict[str, list] = {kind: [] for kind in self.KINDS}
+
+    @contextlib.contextmanager
+    def unit(self) -> Iterator[bpy.types.Scene]:
+        """One unit of work in the temporary scene (made by the first unit)."""
+        before = {kind: set(getattr(bpy.data, kind)) for kind in self.KINDS}
+        window = bpy.context.window
+        previous = window.scene if window is not None else None
+        try:
+            if self.scene is None:
+                self.scene = bpy.data.scenes.new(self.name)
+            if window is not None:
+                window.scene = self.scene
+            yield self.scene
+        finally:
+            if window is not None and previous is not None:
+                window.scene = previous
+            for kind, old in before.items():
+                self.made[kind].extend(d for d in getattr(bpy.data, kind) if d not in old)
+
+    def remove(self) -> None:
+        """Remove the temporary scene and everything the units made."""
+        for kind in self.KINDS:
             coll = getattr(bpy.data, kind)
-            for datablock in list(coll):
-                if datablock not in old:
+            for datablock in self.made[kind]:
+                with contextlib.suppress(ReferenceError):  # removed with another (a mesh's shape keys' action)
                     coll.remove(datablock)
-        bpy.data.scenes.remove(scene)
+            self.made[kind] = []
+        if self.scene is not None:
+            bpy.data.scenes.remove(self.scene)
+            self.scene = None
 
 
 UNITS = {"m": 1.0, "mm": 1000.0}
@@ -148,28 +169,56 @@ def _evaluated_positions(ob: bpy.types.Object, positions_mm: np.ndarray, scale: 
     return ev, co.reshape(-1, 3).astype(np.float64) * scale
 
 
-def _bake_evaluated(
-    ob: bpy.types.Object, mesh: FoldMesh, scene: bpy.types.Scene, numbers: list[int], frames: np.ndarray
-) -> bpy.types.Object:
+def _bake_evaluated_steps(
+    ob: bpy.types.Object, mesh: FoldMesh, scratch: Scratch, numbers: list[int], frames: np.ndarray
+) -> Generator[Progress, None, bpy.types.Object]:
     """A new object holding ``ob``'s evaluated mesh (modifiers applied) with every frame baked to shape keys from
-    the evaluated positions, basis = the evaluated flat sheet. Raises ValueError if a modifier changes the topology
-    from frame to frame."""
+    the evaluated positions, basis = the evaluated flat sheet; one frame's evaluation per unit. Raises ValueError if
+    a modifier changes the topology from frame to frame."""
     from . import bake, mesh_object
 
-    scale = mesh_object.mm_per_unit(scene)
-    ev, base = _evaluated_positions(ob, mesh.vertices_3d, scale)
-    out = bpy.data.meshes.new_from_object(
-        ev, preserve_all_data_layers=True, depsgraph=bpy.context.evaluated_depsgraph_get()
-    )
-    shapes = [_evaluated_positions(ob, p, scale)[1] for p in frames]
-    baked = bpy.data.objects.new(ob.name, out)
-    scene.collection.objects.link(baked)
-    scene.collection.objects.unlink(ob)
-    bake.bake_shape_keys(baked, numbers, shapes, basis=base, scene=scene)
+    with scratch.unit() as scene:
+        scale = mesh_object.mm_per_unit(scene)
+        ev, base = _evaluated_positions(ob, mesh.vertices_3d, scale)
+        out = bpy.data.meshes.new_from_object(
+            ev, preserve_all_data_layers=True, depsgraph=bpy.context.evaluated_depsgraph_get()
+        )
+    shapes = []
+    for k, p in enumerate(frames):
+        yield _progress("setup", k + 1, len(frames))
+        with scratch.unit():
+            shapes.append(_evaluated_positions(ob, p, scale)[1])
+    yield _progress("setup", len(frames), len(frames))
+    with scratch.unit() as scene:
+        baked = bpy.data.objects.new(ob.name, out)
+        scene.collection.objects.link(baked)
+        scene.collection.objects.unlink(ob)
+        bake.bake_shape_keys(baked, numbers, shapes, basis=base, scene=scene)
     return baked
 
 
+def _progress(stage: str, k: int = 0, n: int = 0) -> Progress:
+    """Progress of the file-writing half of an export (from 50 %: the export job reads the frames first)."""
+    return Progress(stage, frame=k, n_frames=n, fraction=0.5 + 0.45 * (k / n if n else 1.0), alone=stage == "export")
+
+
 def export_folded_file(
+    path: str | Path,
+    mesh: FoldMesh,
+    frames: np.ndarray | Sequence[np.ndarray],
+    **kwargs,
+) -> Path:
+    """Write the folded ``mesh`` at ``frames`` to ``path`` in one call (the command line, scripts); returns the path.
+    The arguments and what is written are :func:`export_steps`'."""
+    steps = export_steps(path, mesh, frames, **kwargs)
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+
+
+def export_steps(
     path: str | Path,
     mesh: FoldMesh,
     frames: np.ndarray | Sequence[np.ndarray],
@@ -180,9 +229,11 @@ def export_folded_file(
     fps: int = 24,
     unit: str | None = None,
     modifiers_from: bpy.types.Object | None = None,
+    scratch: Scratch | None = None,
     **fold_kwargs,
-) -> Path:
-    """Write the folded ``mesh`` at ``frames`` (``(n, 3)`` or ``(k, n, 3)`` mm) to ``path``; returns the path.
+) -> Generator[Progress, None, Path]:
+    """Write the folded ``mesh`` at ``frames`` (``(n, 3)`` or ``(k, n, 3)`` mm) to ``path`` in units of work (one
+    ``next`` each, yielding the :class:`~.jobs.Progress` of the unit that follows); returns the path.
 
     By suffix: ``.obj``/``.stl`` the last frame; ``.glb``/``.gltf`` the last frame, plus morph targets (with morph
     normals) and an animation when there are several frames, the flat sheet as the base shape; ``.blend`` an object
@@ -192,6 +243,12 @@ def export_folded_file(
     (default :data:`DEFAULT_UNIT`), any FOLD ``frame_unit`` for ``.fold``. ``modifiers_from`` is an object whose
     enabled modifiers (Solidify, ...) are applied to the exported mesh at every frame. Raises ``ValueError`` for an
     unknown suffix or unit.
+
+    Units: FOLD encodes a frame per unit and writes the file in the last; the Blender formats set up the temporary
+    scene (:class:`Scratch`, given as ``scratch`` by a job that must know it) in units (one per frame when a
+    modifier is evaluated), then call Blender's exporter in one unit of its own (``alone``), which cannot be split:
+    ~200 ms for a glTF of 3,000 faces with 60 morph targets (docs/benchmarks.md). The file is written atomically in
+    the last unit: closed before it (a cancelled job), the generator leaves no file and the temporary scene removed.
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -206,46 +263,200 @@ def export_folded_file(
         if angles is None:
             from ..core.metrics import measures as metrics
 
-            angles = [metrics.fold_angles(mesh, p) for p in arr]
+            angles = []
+            for k, p in enumerate(arr):
+                angles.append(metrics.fold_angles(mesh, p))
+                yield _progress("frame", k + 1, len(arr))
         if unit is not None:
             fold_kwargs["unit"] = unit  # FOLD has its own units (frame_unit)
-        fold_format.write_folded_fold(path, mesh, list(arr), list(np.atleast_2d(angles)), **fold_kwargs)
+        yield _progress("encode", 0, len(arr))  # the key frame (the flat pattern), then a frame per unit
+        encode = fold_format.folded_fold_text_steps(mesh, list(arr), list(np.atleast_2d(angles)), **fold_kwargs)
+        while True:
+            try:
+                k = next(encode)
+            except StopIteration as done:
+                text = done.value
+                break
+            yield _progress("encode", k, len(arr))
+        yield _progress("write", len(arr), len(arr))
+        atomic_write_text(path, text)
         return path
     if suffix not in BLENDER_SUFFIXES:
         raise ValueError(f"{path}: cannot export '{suffix}' files; use one of .fold .svg {' '.join(BLENDER_SUFFIXES)}")
     unit = unit or DEFAULT_UNIT[suffix]
     if unit not in UNITS or (unit != "m" and suffix not in (".stl", ".obj")):
         raise ValueError(f"{path}: unit {unit!r} not offered for '{suffix}' (STL/OBJ: mm or m; others: m)")
-    path.parent.mkdir(parents=True, exist_ok=True)
     numbers = list(frame_numbers) if frame_numbers is not None else list(range(1, len(arr) + 1))
     animated = len(arr) > 1 and suffix in (".glb", ".gltf", ".blend")
     from . import bake, mesh_object
 
-    with temporary_scene() as scene:
-        scene.render.fps = int(fps)
-        scene.frame_start, scene.frame_end = numbers[0], numbers[-1]
-        # Animated: the mesh itself is the flat sheet (= the basis key), so the base normals belong to the base
-        # positions; morph targets then carry their own normals.
-        base = mesh.vertices_3d if animated else arr[-1]
-        ob = mesh_object.create_fold_object(mesh, base, name, scene.collection, scene=scene, creases=False)
-        _paper_surface(ob, mesh)
-        if modifiers_from is not None:
-            user_scene = next(iter(modifiers_from.users_scene), None)
-            factor = 1.0 if user_scene is None else mesh_object.mm_per_unit(user_scene) / mesh_object.mm_per_unit(scene)
-            _copy_modifiers(modifiers_from, ob, factor)
+    scratch = scratch if scratch is not None else Scratch()
+    yield _progress("setup", 0, len(arr))
+    try:
+        with scratch.unit() as scene:
+            scene.render.fps = int(fps)
+            scene.frame_start, scene.frame_end = numbers[0], numbers[-1]
+            # Animated: the mesh itself is the flat sheet (= the basis key), so the base normals belong to the base
+            # positions; morph targets then carry their own normals.
+            base = mesh.vertices_3d if animated else arr[-1]
+            ob = mesh_object.create_fold_object(mesh, base, name, scene.collection, scene=scene, creases=False)
+            _paper_surface(ob, mesh)
+            if modifiers_from is not None:
+                user_scene = next(iter(modifiers_from.users_scene), None)
+                factor = (
+                    1.0 if user_scene is None else mesh_object.mm_per_unit(user_scene) / mesh_object.mm_per_unit(scene)
+                )
+                _copy_modifiers(modifiers_from, ob, factor)
         if animated and len(ob.modifiers):
-            ob = _bake_evaluated(ob, mesh, scene, numbers, arr)
+            ob = yield from _bake_evaluated_steps(ob, mesh, scratch, numbers, arr)
         elif animated:
-            bake.bake_shape_keys(ob, numbers, list(arr), scene=scene)
-        if modifiers_from is not None:  # turned and scaled as in the user's scene (not moved: placed at the origin)
-            ob.matrix_world = modifiers_from.matrix_world.to_3x3().to_4x4()
-        if animated:
-            scene.frame_set(numbers[0])
-        with _exported_as(ob, name), atomic_output(path) as tmp:
-            scale = UNITS[unit] * mesh_object.mm_per_unit(scene) / 1000.0
-            _run_exporter(tmp, suffix, ob, animated=animated, scale=scale)
-            check_complete(tmp, suffix, _exported_vertex_count(ob, scene))
+            yield _progress("setup", len(arr), len(arr))
+            with scratch.unit() as scene:
+                bake.bake_shape_keys(ob, numbers, list(arr), scene=scene)
+        with scratch.unit() as scene:
+            if modifiers_from is not None:  # turned and scaled as in the user's scene (not moved: at the origin)
+                ob.matrix_world = modifiers_from.matrix_world.to_3x3().to_4x4()
+            if animated:
+                scene.frame_set(numbers[0])
+        yield _progress("export")
+        with scratch.unit() as scene, _exported_as(ob, name):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_output(path) as tmp:
+                scale = UNITS[unit] * mesh_object.mm_per_unit(scene) / 1000.0
+                _run_exporter(tmp, suffix, ob, animated=animated, scale=scale)
+                check_complete(tmp, suffix, _exported_vertex_count(ob, scene))
+    finally:
+        scratch.remove()
     return path
+
+
+@dataclass
+class ExportResult:
+    """What an export job wrote: the file, how many frames, whether they were baked frames."""
+
+    path: Path
+    n_frames: int
+    baked: bool
+
+
+class ExportWatch:
+    """What an export job shows :mod:`.jobs` in place of a preview: nothing is shown (:meth:`show` and
+    :meth:`restore` do nothing), the folded object it reads is watched for Edit Mode (its arrays are empty there:
+    the job stops with the jobs' one-line message), and a save cancels the job while it holds its temporary scene
+    (:attr:`holds_datablocks`), which the file would otherwise keep."""
+
+    def __init__(self, handle: ObjectHandle, scratch: Scratch):
+        self.handle = handle
+        self.scratch = scratch
+
+    @property
+    def holds_datablocks(self) -> bool:
+        return self.scratch.scene is not None
+
+    def edited(self) -> bpy.types.Object | None:
+        return self.handle.get()
+
+    def show(self, positions_mm: np.ndarray) -> None:
+        pass
+
+    def restore(self) -> None:
+        pass
+
+
+def baked_positions(ob: bpy.types.Object, frame: int, scale: float) -> np.ndarray:
+    """Positions (mm) of ``ob``'s baked ``frame`` (its shape key; ``scale`` mm per Blender unit)."""
+    from . import bake
+
+    co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
+    ob.data.shape_keys.key_blocks[bake.key_name(frame)].points.foreach_get("co", co)
+    return co.reshape(-1, 3).astype(np.float64) * scale
+
+
+def current_positions(ob: bpy.types.Object, scale: float) -> np.ndarray:
+    """Positions (mm) of ``ob``'s vertices (its mesh, without shape keys or modifiers)."""
+    co = np.empty(3 * len(ob.data.vertices), dtype=np.float32)
+    ob.data.attributes["position"].data.foreach_get("vector", co)
+    return co.reshape(-1, 3).astype(np.float64) * scale
+
+
+def current_frame_positions(ob: bpy.types.Object, depsgraph: bpy.types.Depsgraph, scale: float) -> np.ndarray:
+    """Positions (mm) of ``ob``'s own vertices at the current frame: the shape-key mix (animated values, from
+    ``depsgraph``) without the modifiers, which the export applies itself (``export_steps(modifiers_from=ob)``)."""
+    me = ob.data
+    n = len(me.vertices)
+    co = np.empty(3 * n, dtype=np.float32)
+    me.attributes["position"].data.foreach_get("vector", co)
+    out = co.reshape(-1, 3).astype(np.float64)
+    keys = me.shape_keys
+    if keys is not None and keys.use_relative and len(keys.key_blocks) > 1:
+        evaluated = keys.evaluated_get(depsgraph)
+
+        def key_co(kb) -> np.ndarray:
+            buf = np.empty(3 * n, dtype=np.float32)
+            kb.points.foreach_get("co", buf)
+            return buf.reshape(-1, 3).astype(np.float64)
+
+        out = key_co(keys.reference_key)
+        for kb, ev in zip(keys.key_blocks[1:], evaluated.key_blocks[1:], strict=True):
+            if not kb.mute and ev.value != 0.0:
+                out += ev.value * (key_co(kb) - key_co(kb.relative_key))
+    return out * scale
+
+
+def export_job(
+    ob: bpy.types.Object, path: str | Path, *, unit: str | None = None, scene: bpy.types.Scene | None = None
+) -> Job:
+    """The Export Folded Mesh operator's one scene call: a job writing the folded object ``ob`` to ``path`` (the
+    format by its suffix; ``unit`` for STL/OBJ) whose result is an :class:`ExportResult`.
+
+    Units: the flat pattern read back from the object; one frame read per unit (the baked frames' shape keys, or
+    the current frame; for FOLD with its unwrapped fold angles, ``core.metrics.measures.AngleFollower``); then
+    :func:`export_steps`' units. Blender's exporter is one unit that cannot be split. Cancelled before its last
+    unit, the job leaves no file (an existing one untouched) and no temporary datablock."""
+    from . import bake, mesh_object
+
+    scene = scene if scene is not None else bpy.context.scene
+    handle = ObjectHandle(ob)
+    path = Path(path)
+    suffix = path.suffix.lower()
+    fps = scene.render.fps
+    scratch = Scratch()
+
+    def steps():
+        ob = handle.require("folded object")
+        mesh = mesh_object.read_fold_mesh(ob)
+        frames = bake.baked_frames(ob)
+        scale = mesh_object.mm_per_unit(scene)
+        current = suffix in (".obj", ".stl")  # the current frame, with the shape keys' animated values
+        n = 1 if current or not frames else len(frames)
+        follow = None
+        if suffix == ".fold":
+            from ..core.metrics import measures as metrics
+
+            # the solver's unwrapped angles of the last fold start an unbaked frame (a valley past flat is 199°,
+            # not −161°); baked frames are followed from the flat sheet
+            follow = metrics.AngleFollower(mesh, None if frames else mesh_object.simulated_fold_angles(ob))
+        positions, angles = [], []
+        for k in range(n):
+            yield Progress("frame", frame=k + 1, n_frames=n, fraction=0.5 * k / n)
+            ob = handle.require("folded object")
+            if current:
+                p = current_frame_positions(ob, bpy.context.evaluated_depsgraph_get(), scale)
+            else:
+                p = baked_positions(ob, frames[k], scale) if frames else current_positions(ob, scale)
+            positions.append(p)
+            if follow is not None:
+                angles.append(follow(p))
+        if follow is not None:
+            kwargs = {"fold_angles": angles}
+        else:
+            kwargs = {"name": ob.name, "fps": fps, "modifiers_from": ob, "unit": unit, "scratch": scratch}
+            if not current:
+                kwargs["frame_numbers"] = frames or None
+        written = yield from export_steps(path, mesh, positions, **kwargs)
+        return ExportResult(written, len(positions), bool(frames))
+
+    return Job(ob.name, "exporting", steps(), ExportWatch(handle, scratch))
 
 
 def check_complete(path: Path, suffix: str, n_vertices: int) -> None:
@@ -469,7 +680,5 @@ def write_pattern_svg(
     else:
         body = [ln for a in SVG_STROKES for ln in by_role[a]]
     text = "\n".join([*head, *body, "</svg>"]) + "\n"
-    from ..core.io.atomic import atomic_write_text
-
     atomic_write_text(path, text)
     return path

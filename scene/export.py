@@ -277,7 +277,7 @@ def export_steps(
             except StopIteration as done:
                 text = done.value
                 break
-            yield _progress("encode", k, len(arr))
+            yield _progress("encode", k + 1, len(arr))
         yield _progress("write", len(arr), len(arr))
         atomic_write_text(path, text)
         return path

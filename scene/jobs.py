@@ -106,6 +106,8 @@ class Progress:
         if self.stage in STAGE_TEXT:
             return STAGE_TEXT[self.stage]
         if self.stage == "encode" and self.n_frames:
+            if not self.frame:
+                return "encoding the crease pattern"
             return f"encoding frame {self.frame} of {self.n_frames}"
         if self.stage == "frame" and self.n_frames:
             left = ""

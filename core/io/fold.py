@@ -776,7 +776,7 @@ def folded_fold_text_steps(
     extra: dict[str, Any] | None = None,
 ) -> Generator[int, None, str]:
     """The text of :func:`write_folded_fold`'s file in units of work: the key frame, then one frame per ``next``
-    (yields the number of frames encoded so far); returns the whole text, byte for byte ``json.dumps`` of
+    (yields the index of the frame it encodes next); returns the whole text, byte for byte ``json.dumps`` of
     :func:`folded_to_fold` plus a newline. Encoding 60 frames of a 3,000-face pattern in one ``json.dumps`` took
     ~220 ms; an export job runs these units in slices (``scene.export``)."""
     _check_folded(mesh, frames, fold_angles, unit)
@@ -791,12 +791,11 @@ def folded_fold_text_steps(
     keys = list(data)
     split = keys.index("file_frames")
     head = [member(k, data[k]) for k in keys[:split]]
-    yield 0
     encoded = []
     for k, f in enumerate(frames):
+        yield k
         angles = None if fold_angles is None else fold_angles[k]
         encoded.append(json.dumps(_folded_frame(mesh, k, f, angles, unit), allow_nan=False))
-        yield k + 1
     tail = [member(k, data[k]) for k in keys[split + 1 :]]
     body = [*head, json.dumps("file_frames") + ": [" + ", ".join(encoded) + "]", *tail]
     return "{" + ", ".join(body) + "}\n"

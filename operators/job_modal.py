@@ -89,6 +89,8 @@ class JobOperator:
             return {"PASS_THROUGH"}
         if not job.running:  # superseded or cancelled elsewhere
             self._end_ui(context)
+            if job.cancel_reason:
+                self.report({"WARNING"}, f"Cancelled {job.kind} '{job.owner}': {job.cancel_reason}")
             return {"CANCELLED"}
         try:
             ended = jobs.run_slice(job)

@@ -301,6 +301,8 @@ class Job:
         self.pending_commit: Callable[[], Any] | None = None
         """The commit, once the work is done, when it is left for the next slice (:func:`run_slice`)."""
         self.error: BaseException | None = None
+        self.cancel_reason = ""
+        """Why the job was cancelled, when not by its user (a save): the modal operator reports it."""
         self.slices = 0
         self.units = 0
         self.longest_slice_ms = 0.0
@@ -475,11 +477,13 @@ def run_slice(job: Job, budget_ms: float | None = None) -> bool:
     return False
 
 
-def cancel(job: Job) -> None:
+def cancel(job: Job, reason: str = "") -> None:
     """Stop ``job`` between slices: close its generator and restore what its preview changed. Nothing else was
-    written (only the commit writes), so the scene is as it was before the job."""
+    written (only the commit writes), so the scene is as it was before the job. ``reason``: why, when the user did
+    not ask (the modal operator reports it)."""
     if not job.running:
         return
+    job.cancel_reason = reason
     job.steps.close()
     try:
         _restore(job)
@@ -504,8 +508,10 @@ def hide_previews() -> None:
     would otherwise keep."""
     for job in list(_jobs.values()):
         if job.running and job.preview is not None:
-            if _in_edit_mode(job) is not None or getattr(job.preview, "holds_datablocks", False):
+            if _in_edit_mode(job) is not None:
                 cancel(job)
+            elif getattr(job.preview, "holds_datablocks", False):
+                cancel(job, "the file was saved while it held its temporary scene; nothing was written, run it again")
             else:
                 job.preview.restore()
 

@@ -154,7 +154,7 @@ def test_a_second_job_on_the_object_is_busy_and_a_save_cancels_the_export(baked,
         bpy.ops.curved_fold.bake()
     blocks = datablocks()
     bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "saved.blend"), copy=True)  # without the temporary scene
-    assert job.state == "cancelled" and datablocks() != blocks
+    assert job.state == "cancelled" and "saved" in job.cancel_reason and datablocks() != blocks
     with bpy.data.libraries.load(str(tmp_path / "saved.blend")) as (src, _):
         assert list(src.scenes) == [bpy.context.scene.name]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["saved.blend"]
@@ -173,7 +173,7 @@ def test_an_export_stops_if_its_object_is_put_in_edit_mode(baked, extension, tmp
 
 def test_the_modal_export_ends_with_its_own_error_or_esc(baked, extension, tmp_path, monkeypatch):
     """The modal handler driven by hand (timer ticks, Esc): a write that fails (a missing folder) ends the job with
-    its own message, not "the scene changed while it ran"; Esc leaves no file."""
+    its own message, not "the scene changed while it ran"; Esc leaves no file; a save cancelling it is reported."""
     from .test_jobs import _Event
 
     jobs, export = mod(extension, "scene.jobs"), mod(extension, "scene.export")
@@ -199,3 +199,10 @@ def test_the_modal_export_ends_with_its_own_error_or_esc(baked, extension, tmp_p
         assert runner.modal(bpy.context, _Event("TIMER")) == {"RUNNING_MODAL"}
     assert runner.modal(bpy.context, _Event("ESC", "PRESS")) == {"CANCELLED"}
     assert "as it was" in reports[-1][1] and list(tmp_path.iterdir()) == []
+    # a save (its handler hides the previews) cancels an export holding its temporary scene: the operator says so
+    runner._job = jobs.start(export.export_job(baked, tmp_path / "a.glb"))
+    while not runner._job.preview.holds_datablocks:
+        assert runner.modal(bpy.context, _Event("TIMER")) == {"RUNNING_MODAL"}
+    jobs.hide_previews()
+    assert runner.modal(bpy.context, _Event("TIMER")) == {"CANCELLED"}
+    assert reports[-1][0] == "WARNING" and "saved" in reports[-1][1] and list(tmp_path.iterdir()) == []

@@ -11,7 +11,7 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from ..scene import bake, export, folding, mesh_object, source_state
+from ..scene import bake, export, folding, mesh_object, source_state, timeline
 from . import _common
 from .job_modal import JobOperator
 
@@ -104,6 +104,7 @@ class CURVED_FOLD_OT_export_folded(JobOperator, bpy.types.Operator, ExportHelper
         return ExportHelper.invoke(self, context, event)
 
     def execute(self, context):
+        timeline.finish_frame_job(context.active_object)  # the frame the timeline is on, not the one before it
         self._choose_format()
         if self.browsed and not bpy.app.background and context.window is not None:
             ob = context.active_object

@@ -37,6 +37,7 @@ class JobOperator:
 
     def execute(self, context):
         try:
+            jobs.stop_live(context.active_object)  # before make_job snapshots it (a frame job's partial shape)
             job = jobs.start(self.make_job(context))
             result = jobs.run_to_end(job)
         except (*folding.engine_errors(), *self.own_errors) as exc:
@@ -51,6 +52,7 @@ class JobOperator:
     def start_modal(self, context):
         """Start the job in slices on a window timer (``invoke``, or an ``execute`` after a file browser)."""
         try:
+            jobs.stop_live(context.active_object)  # before make_job snapshots it (a frame job's partial shape)
             self._job = jobs.start(self.make_job(context))
         except folding.engine_errors() as exc:
             return self._fail(exc)

@@ -362,6 +362,7 @@ def bake_job(ob: bpy.types.Object, frames: Sequence[int], *, scene=None):
 
     from . import folding, jobs, timeline
 
+    jobs.stop_live(ob)  # a frame job's partial shape is not the "before" its Esc restores
     frames = [int(f) for f in frames]
     if not frames:
         raise ValueError("the frame range is empty")

@@ -414,7 +414,9 @@ def export_job(
     the current frame; for FOLD with its unwrapped fold angles, ``core.metrics.measures.AngleFollower``); then
     :func:`export_steps`' units. Blender's exporter is one unit that cannot be split. Cancelled before its last
     unit, the job leaves no file (an existing one untouched) and no temporary datablock."""
-    from . import bake, mesh_object
+    from . import bake, mesh_object, timeline
+
+    timeline.finish_frame_job(ob)  # the frame the timeline is on, not the previous one a cancel would restore
 
     scene = scene if scene is not None else bpy.context.scene
     handle = ObjectHandle(ob)

@@ -522,6 +522,7 @@ def refold_job(
 
     A rebuild that yields the same mesh as the stored one keeps the mesh (no re-meshing). An explicit re-fold
     clears a bake (stale); a ``live`` one keeps it, marked out of date (:func:`bake.mark_stale`)."""
+    jobs.stop_live(ob)  # a frame job's partial shape is neither the warm start nor what Esc restores
     props = ob.curved_fold_mesh
     sources = source_objects(ob)
     if rebuild is None:

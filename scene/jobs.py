@@ -345,9 +345,30 @@ def free_owner(name: str) -> str:
     return candidate
 
 
+def _previews(job: Job, uid: int) -> bool:
+    """Whether ``job``'s preview changes the object with ``session_uid`` ``uid``."""
+    ob = job.preview.edited() if job.preview is not None else None
+    return ob is not None and ob.session_uid == uid
+
+
+def stop_live(ob: bpy.types.Object | None) -> None:
+    """Cancel the live jobs (a frame job, a live re-fold) showing their work on ``ob``, found by the object itself,
+    not by the name they were started under: call it before a new job on ``ob`` snapshots the object, so the new
+    job's Esc restores the shape from before the live one (a Bake started while a frame job showed a half-folded
+    frame restored that frame), and a job started before a rename is not left running beside the new one."""
+    if ob is None:
+        return
+    for job in list(_jobs.values()):
+        if job.running and job.live and _previews(job, ob.session_uid):
+            cancel(job)
+
+
 def start(job: Job) -> Job:
-    """Register ``job`` as its owner's one job. A running live job on the owner is cancelled (superseded); any
-    other running job there raises :class:`JobBusyError`."""
+    """Register ``job`` as its owner's one job. A running live job on the owner, or showing its work on the same
+    object (:func:`stop_live`), is cancelled (superseded); any other running job there raises
+    :class:`JobBusyError`."""
+    target = job.preview.edited() if job.preview is not None else None
+    stop_live(target)
     old = running_job(job.owner)
     if old is not None and old is not job:
         if not old.live:
@@ -475,6 +496,15 @@ def run_slice(job: Job, budget_ms: float | None = None) -> bool:
         _end(job, "done")
         return True
     return False
+
+
+def drop(job: Job) -> None:
+    """End ``job`` without restoring its preview: the shape it shows stays (a frame job whose object the user took
+    into Edit Mode keeps the shape they are editing; restoring would mean throwing them out of Edit Mode)."""
+    if not job.running:
+        return
+    job.steps.close()
+    _end(job, "cancelled")
 
 
 def cancel(job: Job, reason: str = "") -> None:

@@ -108,6 +108,7 @@ def run_pending(*, blocking: bool = True) -> dict[str, str]:
             continue
         _guard["running"] = True
         try:
+            jobs.stop_live(ob)  # a frame job's partial shape is no start for the re-fold, nor its Esc's restore
             job = jobs.start(
                 folding.refold_job(
                     ob,

@@ -28,6 +28,7 @@ the history of every earlier frame and is only baked.
 from __future__ import annotations
 
 import hashlib
+import math
 import sys
 from collections.abc import Generator
 from dataclasses import dataclass
@@ -63,6 +64,9 @@ class CachedFrame:
     iterations: int
     converged: bool
     residual: float
+    full: bool = False
+    """Solved with the whole budget (a bake's or a frame job's), not playback's :data:`FRAME_MAX_ITERATIONS`: if
+    it did not converge, solving it again would not either."""
 
 
 def frozen_settings(props):
@@ -224,7 +228,14 @@ class FrameCache:
             raise FloatingPointError(f"frame {frame}: the solver returned non-finite positions")
         iterations = r.iterations - r.reused_iterations  # this frame's, not those of the kept path states
         entry = CachedFrame(
-            float(percent), self.settings(props), r.positions, r.theta, iterations, r.converged, r.residual
+            float(percent),
+            self.settings(props),
+            r.positions,
+            r.theta,
+            iterations,
+            r.converged,
+            r.residual,
+            full=not playback,
         )
         self.frames[int(frame)] = entry
         return entry
@@ -292,9 +303,10 @@ def frame_job(ob: bpy.types.Object, frame: int, *, scene=None) -> jobs.Job:
     """A job that folds ``ob`` to ``frame`` as a bake does (``path_budget=None``: converged, warm from a solved
     frame or from the natural path) in units of one Newton iteration, showing the sheet as it folds, and caches the
     frame; its commit writes the positions and the panel's frame note. Live (``jobs.start`` lets any other job,
-    or the next frame's, supersede it), so it never blocks the user's next step."""
+    or the next frame's, supersede it), so it never blocks the user's next step. It solves with the settings of
+    its start (a stiffness edited meanwhile cached the frame under the new settings, and a Bake took it)."""
     cache = cache_for(ob)
-    props = ob.curved_fold_mesh
+    props = frozen_settings(ob.curved_fold_mesh)
     percent = percent_at(ob, frame)
     handle = jobs.ObjectHandle(ob)
 
@@ -313,8 +325,8 @@ def frame_job(ob: bpy.types.Object, frame: int, *, scene=None) -> jobs.Job:
     return jobs.Job(ob.name, f"{FRAME_JOB} {frame}", steps(), jobs.PositionsPreview(ob, scene), live=True)
 
 
-_frame_jobs: dict[str, jobs.Job] = {}
-"""Frame jobs running on the timer (:func:`drive_frames`): fold object name → job."""
+_frame_jobs: list[jobs.Job] = []
+"""Frame jobs running on the timer (:func:`drive_frames`), each found by its object, not by a name."""
 
 
 def interactive() -> bool:
@@ -351,28 +363,52 @@ def _ui_idle() -> bool:
     return True
 
 
-def _stop_frame_job(name: str) -> None:
-    """Cancel the frame job running on the fold object ``name``, if any (its preview restored)."""
-    job = _frame_jobs.pop(name, None)
-    if job is not None:
+def finish_frame_job(ob: bpy.types.Object | None) -> None:
+    """Run the frame job showing its work on ``ob`` (every frame job when ``ob`` is None) to its end, here: an
+    export or a save reads the frame the timeline is on (cancelled instead, the previous frame's shape was
+    exported, or saved at the new frame)."""
+    for job in list(_frame_jobs):
+        target = job.preview.edited() if job.preview is not None else None
+        if ob is None or (target is not None and target.session_uid == ob.session_uid):
+            _frame_jobs.remove(job)
+            _run_frame_job(job, math.inf)
+
+
+def _run_frame_job(job: jobs.Job, budget_ms: float) -> bool:
+    """One slice of a frame job (True when it ended): dropped unrun when its object is gone, cancelled when the
+    object is no longer driven (Dynamic mode, keys deleted, a current bake), dropped with the shape it shows when
+    the user took the object into Edit Mode (restoring would throw them out of it). An error ends the job with one
+    line in the object's message, as a playback frame's does."""
+    ob = job.preview.edited() if job.preview is not None else None
+    if ob is None:
         jobs.cancel(job)
+        return True
+    if ob.mode == "EDIT":
+        jobs.drop(job)
+        return True
+    if not driven(ob):
+        jobs.cancel(job)
+        return True
+    while True:
+        try:
+            if jobs.run_slice(job, budget_ms):
+                return True
+        except Exception as exc:  # noqa: BLE001 - the job has ended (run_slice restored its preview): one line
+            ob.curved_fold_mesh.last_message = f"{job.kind}: {folding.failure_reason(exc)}"
+            return True
+        if not math.isinf(budget_ms):
+            return not job.running
 
 
 def drive_frames(budget_ms: float | None = None) -> bool:
-    """One slice of every running frame job (the timer body; tests call it directly). Returns True while any job
-    still runs. An error ends that job with one line in the object's message, as a playback frame's does."""
-    for name, job in list(_frame_jobs.items()):
-        try:
-            budget = jobs.SLICE_MS if budget_ms is None else budget_ms
-            if jobs.run_slice(job, budget / max(len(_frame_jobs), 1)):
-                _frame_jobs.pop(name, None)
-        except Exception as exc:  # noqa: BLE001 - the job has ended (run_slice restored its preview): one line
-            _frame_jobs.pop(name, None)
-            ob = bpy.data.objects.get(name)
-            if ob is not None:
-                ob.curved_fold_mesh.last_message = f"{job.kind}: {folding.failure_reason(exc)}"
-        if not job.running:
-            _frame_jobs.pop(name, None)
+    """One slice of every running frame job, the budget shared (the timer body; tests call it directly). Returns
+    True while any job still runs."""
+    budget = jobs.SLICE_MS if budget_ms is None else budget_ms
+    share = budget / max(len(_frame_jobs), 1)
+    for job in list(_frame_jobs):
+        if not job.running or _run_frame_job(job, share):
+            if job in _frame_jobs:
+                _frame_jobs.remove(job)
     return bool(_frame_jobs)
 
 
@@ -404,16 +440,18 @@ def on_frame_change(scene, depsgraph=None) -> None:
     """``frame_change_post``: fold every driven fold object of ``scene`` to the new frame. Errors go to the
     object's message (a bad frame must not break playback)."""
     sliced = interactive()
+    started = False
     for ob in list(scene.objects):
         frame = scene.frame_current
         try:
             if not driven(ob):
                 continue
-            _stop_frame_job(ob.name)  # an earlier frame's job: this frame supersedes it
+            jobs.stop_live(ob)  # an earlier frame's job: this frame supersedes it
             if sliced:
                 entry = cache_for(ob).get(frame, percent_at(ob, frame), ob.curved_fold_mesh)
-                if entry is None or not entry.converged:
-                    _start_frame_job(ob, frame, scene)
+                if entry is None or not (entry.converged or entry.full):
+                    _frame_jobs.append(jobs.start(frame_job(ob, frame, scene=scene)))
+                    started = True
                     continue
                 mesh_object.update_positions(ob, entry.positions, scene=scene)
             else:
@@ -422,18 +460,13 @@ def on_frame_change(scene, depsgraph=None) -> None:
             ob.curved_fold_mesh.last_message = f"frame {frame}: {exc}"
             continue
         _say_frame(ob.curved_fold_mesh, frame, entry)
-
-
-def _start_frame_job(ob: bpy.types.Object, frame: int, scene) -> None:
-    """Start :func:`frame_job` and run its first slice here (a frame a few iterations from a solved one is done
-    in it); the rest runs on the timer."""
-    job = jobs.start(frame_job(ob, frame, scene=scene))
-    _frame_jobs[ob.name] = job
-    if drive_frames() and not bpy.app.timers.is_registered(_drive):
+    # the new jobs' first slice here, one budget shared (a frame a few iterations from a solved one ends in it);
+    # the rest on the timer
+    if started and drive_frames() and not bpy.app.timers.is_registered(_drive):
         bpy.app.timers.register(_drive, first_interval=0.0)
 
 
-FRAME_NOTE = "not converged in playback's"
+FRAME_NOTE = "not converged in"
 """What a frame's note says (:func:`_say_frame`), so the next converged frame clears only such a note."""
 
 
@@ -442,13 +475,16 @@ def _say_frame(props, frame: int, entry: CachedFrame) -> None:
     :data:`FRAME_MAX_ITERATIONS` without a word, and the panel still showed the static fold's figures (a designer
     session counted 16 unconverged frames of 60 on Carved_Cylinder). A converged frame clears such a note."""
     if not entry.converged:
-        note = (
-            f"frame {frame}: {FRAME_NOTE} {FRAME_MAX_ITERATIONS} iterations (residual {entry.residual:.1e}); "
-            "Bake solves it fully"
-        )
+        if entry.full:  # a bake's budget: baking again gives the same
+            note = f"frame {frame}: {FRAME_NOTE} the solver's whole budget (residual {entry.residual:.1e})"
+        else:
+            note = (
+                f"frame {frame}: {FRAME_NOTE} playback's {FRAME_MAX_ITERATIONS} iterations "
+                f"(residual {entry.residual:.1e}); Bake solves it fully"
+            )
         if props.last_message != note:
             props.last_message = note
-    elif FRAME_NOTE in props.last_message:
+    elif props.last_message.startswith("frame ") and FRAME_NOTE in props.last_message:
         props.last_message = ""
 
 
@@ -471,7 +507,10 @@ def on_undo(*_args) -> None:
 
 @persistent
 def on_save_pre(*_args) -> None:
-    """A save is about to write the file: the running jobs' previews come off first (:func:`jobs.hide_previews`)."""
+    """A save is about to write the file: frame jobs end first (the file holds the frame it is saved on, not the
+    previous frame's shape at the new frame), then the other running jobs' previews come off
+    (:func:`jobs.hide_previews`)."""
+    finish_frame_job(None)
     jobs.hide_previews()
 
 

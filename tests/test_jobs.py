@@ -361,6 +361,124 @@ def test_a_frame_change_from_python_stays_synchronous(folded, extension, monkeyp
     assert seen == [False] and len(looked) == n_objects
 
 
+def _stepped_mid_job(extension, ob, monkeypatch, to: int = 8):
+    """Frame 5 solved (from Python), then the user steps to ``to``: its frame job has shown two slices. Returns
+    (timeline, jobs, the frame job, frame 5's positions)."""
+    timeline = mod(extension, "scene.timeline")
+    jobs = mod(extension, "scene.jobs")
+    keyframe_percent(ob, {1: 10.0, 9: 90.0})
+    bpy.context.scene.frame_set(5)
+    shown5 = positions_mm(ob)
+    monkeypatch.setattr(jobs, "SLICE_MS", 0.0)
+    monkeypatch.setattr(timeline, "interactive", lambda: True)
+    bpy.context.scene.frame_set(to)
+    monkeypatch.setattr(timeline, "interactive", lambda: False)
+    timeline.drive_frames()
+    job = jobs.running_job(ob.name)
+    assert job is not None and job.kind == f"folding frame {to}" and not np.array_equal(positions_mm(ob), shown5)
+    return timeline, jobs, job, shown5
+
+
+def test_a_frame_job_gives_way_to_the_users_next_step_whatever_it_is(folded, extension, monkeypatch, tmp_path):
+    """A designer reviewer's session with the frame jobs: a Bake or Re-fold started while a frame job showed a
+    half-folded frame took that frame as its "before" (Esc left it); renamed mid-job, the frame job was found by
+    no one and went on beside a Bake, muting its keys; a stiffness edited mid-job cached the frame under the new
+    settings; an export right after a step wrote the frame before; a save wrote the previous frame's shape at the
+    new frame; Tab into Edit Mode threw the user back out. Each now ends the frame job as the user needs."""
+    ob, _, _ = folded
+    scene = bpy.context.scene
+    bake = mod(extension, "scene.bake")
+    folding = mod(extension, "scene.folding")
+    scene.frame_start, scene.frame_end = 1, 9
+    timeline, jobs, job, shown5 = _stepped_mid_job(extension, ob, monkeypatch)
+    # a Bake (or Re-fold) made now snapshots frame 5's shape, not the half-folded one: its Esc restores frame 5
+    for make in (lambda: bake.bake_job(ob, range(1, 10), scene=scene), lambda: folding.refold_job(ob, rebuild=False)):
+        other = jobs.start(make())
+        assert job.state == "cancelled" and np.array_equal(positions_mm(ob), shown5)
+        jobs.run_slice(other, 0.0)
+        jobs.cancel(other)
+        assert np.array_equal(positions_mm(ob), shown5)
+        timeline, jobs, job, shown5 = _stepped_mid_job(extension, ob, monkeypatch)
+    # renamed mid-job: a Bake still supersedes it, and its keys are left as the bake made them
+    ob.name = "Renamed mid-job"
+    assert bpy.ops.curved_fold.bake() == {"FINISHED"} and job.state == "cancelled"
+    assert not timeline.drive_frames()
+    assert not any(k.mute for k in ob.data.shape_keys.key_blocks[1:]) and not bake.is_stale(ob)
+    bpy.ops.curved_fold.clear_bake()
+    # a stiffness edited mid-job: the frame is cached under the settings it was solved with
+    timeline.clear()
+    timeline, jobs, job, shown5 = _stepped_mid_job(extension, ob, monkeypatch)
+    ob.curved_fold_mesh.crease_stiffness *= 3.0
+    while timeline.drive_frames():
+        pass
+    cache = timeline.cache_for(ob)
+    assert 8 in cache.frames and cache.get(8, timeline.percent_at(ob, 8), ob.curved_fold_mesh) is None
+    ob.curved_fold_mesh.crease_stiffness /= 3.0
+    assert cache.get(8, timeline.percent_at(ob, 8), ob.curved_fold_mesh) is not None
+    # an export right after a step writes the frame the timeline is on (the job is finished first)
+    timeline.clear()
+    timeline, jobs, job, shown5 = _stepped_mid_job(extension, ob, monkeypatch, to=7)
+    path = tmp_path / "frame7.obj"
+    assert bpy.ops.curved_fold.export_folded(filepath=str(path), file_format="OBJ", unit="MM") == {"FINISHED"}
+    assert job.state == "done"
+    written = np.array(
+        [[float(v) for v in line.split()[1:4]] for line in path.read_text().splitlines() if line.startswith("v ")]
+    )
+    frame7 = timeline.cache_for(ob).frames[7].positions
+    assert np.ptp(written[:, 1]) == pytest.approx(np.ptp(frame7[:, 2]), rel=1e-3)  # OBJ is Y-up
+    # a save finishes the frame job: the file holds the frame it is saved on
+    timeline.clear()
+    timeline, jobs, job, shown5 = _stepped_mid_job(extension, ob, monkeypatch, to=6)
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "mid.blend"), copy=True)
+    assert job.state == "done"
+    np.testing.assert_allclose(positions_mm(ob), timeline.cache_for(ob).frames[6].positions, atol=1e-3)
+    # Tab into Edit Mode mid-job: the job ends and the user stays in Edit Mode, on the shape they see
+    timeline.clear()
+    timeline, jobs, job, shown5 = _stepped_mid_job(extension, ob, monkeypatch, to=4)
+    bpy.context.view_layer.objects.active = ob
+    bpy.ops.object.mode_set(mode="EDIT")
+    assert not timeline.drive_frames()
+    assert job.state == "cancelled" and ob.mode == "EDIT"
+    bpy.ops.object.mode_set(mode="OBJECT")
+    # the object deleted, or no longer driven (Dynamic mode), mid-job: the timer lets the job go
+    timeline.clear()
+    timeline, jobs, job, shown5 = _stepped_mid_job(extension, ob, monkeypatch, to=3)
+    ob.curved_fold_mesh.solver_mode = "DYNAMIC"
+    assert not timeline.drive_frames() and job.state == "cancelled"
+    assert np.array_equal(positions_mm(ob), shown5)
+
+
+def test_a_frame_that_does_not_converge_in_the_whole_budget_is_not_solved_again(folded, extension, monkeypatch):
+    """A frame job solves with a bake's budget: a frame it leaves unconverged said "not converged in playback's
+    12 iterations; Bake solves it fully" (false) and was solved again on every visit."""
+    ob, _, _ = folded
+    scene = bpy.context.scene
+    timeline = mod(extension, "scene.timeline")
+    jobs = mod(extension, "scene.jobs")
+    keyframe_percent(ob, {1: 10.0, 9: 90.0})
+    folding = mod(extension, "scene.folding")
+    real = folding.solver_settings
+    monkeypatch.setattr(folding, "solver_settings", lambda props, **kw: replace_iterations(real(props, **kw), 2))
+    monkeypatch.setattr(timeline, "interactive", lambda: True)
+    scene.frame_set(6)
+    while timeline.drive_frames():
+        pass
+    entry = timeline.cache_for(ob).frames[6]
+    assert not entry.converged and entry.full
+    note = ob.curved_fold_mesh.last_message
+    assert note.startswith("frame 6: not converged in the solver's whole budget (residual ") and "playback" not in note
+    scene.frame_set(7)
+    while timeline.drive_frames():
+        pass
+    scene.frame_set(6)  # shown from the cache: no job
+    assert jobs.running_job(ob.name) is None
+
+
+def replace_iterations(settings, n: int):
+    settings.max_iterations = n
+    return settings
+
+
 def test_live_keeps_the_bake_marked_out_of_date(folded, extension):
     ob, _, crease = folded
     scene = bpy.context.scene

@@ -348,8 +348,10 @@ def _called_from_python() -> bool:
 
 
 def _ui_idle() -> bool:
-    """A window shows the scene, no animation plays and no render runs (see :func:`interactive`)."""
-    if bpy.app.background or bpy.app.is_job_running("RENDER"):
+    """A window shows the scene, no animation plays and no render or bake job runs (see :func:`interactive`).
+    Blender's own exporters that step the frames in C (Alembic, USD) and motion paths are not told apart from the
+    user here: bake before them, as for any export of the animation."""
+    if bpy.app.background or any(bpy.app.is_job_running(kind) for kind in ("RENDER", "OBJECT_BAKE")):
         return False
     wm = bpy.context.window_manager
     windows = list(wm.windows) if wm is not None else []

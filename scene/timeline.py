@@ -17,7 +17,8 @@ to that frame's percent — the design's "solver stepped per frame".
   or reads it (capped at :data:`FRAME_MAX_ITERATIONS`). A frame the user steps or scrubs to is a job instead
   (:func:`frame_job`): one slice of ``jobs.SLICE_MS`` in the handler, the rest on a timer (:func:`drive_frames`)
   while the sheet folds in the viewport, solved as a bake solves it (converged, the bake's frame); a newer frame
-  change, a Re-fold or a Bake supersedes it, and its Cancel button or a save leave the shape as it was. Before
+  change, a Re-fold or a Bake supersedes it (their Esc goes back to the shape from before it), its Cancel button
+  leaves the shape as it was, a save or an export finishes it first, and Edit Mode stops it on the shape shown. Before
   this, every frame change of a 3,000-face pleat held Blender for 200–460 ms and showed a frame cut short at 12
   iterations.
 
@@ -377,29 +378,25 @@ def finish_frame_job(ob: bpy.types.Object | None) -> None:
 
 
 def _run_frame_job(job: jobs.Job, budget_ms: float) -> bool:
-    """One slice of a frame job (True when it ended): dropped unrun when its object is gone, cancelled when the
-    object is no longer driven (Dynamic mode, keys deleted, a current bake), dropped with the shape it shows when
-    the user took the object into Edit Mode (restoring would throw them out of it). An error ends the job with one
-    line in the object's message, as a playback frame's does."""
+    """One slice of a frame job, or all of it with an infinite budget (True when it ended). Cancelled when its
+    object is gone or no longer driven (Dynamic mode, keys deleted, a current bake); dropped with the shape it
+    shows when the user took the object into Edit Mode (restoring would throw them out of it). An error ends the
+    job with one line in the object's message, as a playback frame's does."""
     ob = job.preview.edited() if job.preview is not None else None
-    if ob is None:
-        jobs.cancel(job)
-        return True
-    if ob.mode == "EDIT":
+    if ob is not None and ob.mode == "EDIT":
         jobs.drop(job)
         return True
-    if not driven(ob):
+    if ob is None or not driven(ob):
         jobs.cancel(job)
         return True
-    while True:
-        try:
-            if jobs.run_slice(job, budget_ms):
-                return True
-        except Exception as exc:  # noqa: BLE001 - the job has ended (run_slice restored its preview): one line
-            ob.curved_fold_mesh.last_message = f"{job.kind}: {folding.failure_reason(exc)}"
+    try:
+        if math.isinf(budget_ms):
+            jobs.run_to_end(job)
             return True
-        if not math.isinf(budget_ms):
-            return not job.running
+        return jobs.run_slice(job, budget_ms)
+    except Exception as exc:  # noqa: BLE001 - the job has ended (run_slice restored its preview): one line
+        ob.curved_fold_mesh.last_message = f"{job.kind}: {folding.failure_reason(exc)}"
+        return True
 
 
 def drive_frames(budget_ms: float | None = None) -> bool:

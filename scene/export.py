@@ -21,6 +21,7 @@ from xml.sax.saxutils import quoteattr
 import bpy
 import numpy as np
 
+from ..core import run_to_end
 from ..core.io.atomic import atomic_output, atomic_write_text
 from ..core.io.svg import SAMPLED_ATTRIBUTE, SAMPLED_VALUE
 from ..core.mesh.fold_mesh import FoldMesh
@@ -211,12 +212,7 @@ def export_folded_file(
 ) -> Path:
     """Write the folded ``mesh`` at ``frames`` to ``path`` in one call (the command line, scripts); returns the path.
     The arguments and what is written are :func:`export_steps`'."""
-    steps = export_steps(path, mesh, frames, **kwargs)
-    while True:
-        try:
-            next(steps)
-        except StopIteration as done:
-            return done.value
+    return run_to_end(export_steps(path, mesh, frames, **kwargs))
 
 
 def export_steps(

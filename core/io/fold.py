@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import run_to_end
 from ..mesh.fold_mesh import FoldMesh, corner_angles, polygon_sides
 from ..pattern.discretize import segments_at_interval, with_crossings_split
 from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
@@ -812,9 +813,4 @@ def write_folded_fold(
     """Write a folded mesh atomically (:func:`folded_to_fold`): the crease pattern as the key frame, ``frames``
     (mm) as ``file_frames``, ``fold_angles`` (degrees, one array per frame, simulated) as each frame's
     ``edges_foldAngle``. ``extra`` entries are added at the top level (prefix your keys)."""
-    steps = folded_fold_text_steps(mesh, frames, fold_angles, unit, extra)
-    while True:
-        try:
-            next(steps)
-        except StopIteration as done:
-            return atomic_write_text(path, done.value)
+    return atomic_write_text(path, run_to_end(folded_fold_text_steps(mesh, frames, fold_angles, unit, extra)))

@@ -18,7 +18,9 @@ to that frame's percent — the design's "solver stepped per frame".
   (:func:`frame_job`): one slice of ``jobs.SLICE_MS`` in the handler, the rest on a timer (:func:`drive_frames`)
   while the sheet folds in the viewport, solved as a bake solves it (converged, the bake's frame); a newer frame
   change, a Re-fold or a Bake supersedes it (their Esc goes back to the shape from before it), its Cancel button
-  leaves the shape as it was, a save or an export finishes it first, and Edit Mode stops it on the shape shown. Before
+  leaves the shape as it was, a save or an export finishes it first, and Edit Mode stops it on the shape shown. A
+  frame change that another job made pass an object by (a live re-fold, an export) folds it when that job ends
+  (:func:`catch_up`). Before
   this, every frame change of a 3,000-face pleat held Blender for 200–460 ms and showed a frame cut short at 12
   iterations.
 
@@ -285,15 +287,25 @@ def percent_at(ob: bpy.types.Object, frame: float) -> float:
 def driven(ob: bpy.types.Object) -> bool:
     """Whether a frame change should fold ``ob``: a fold object with keyframed settings, not in Edit Mode, not showing
     a current bake (an out-of-date one is muted), no job running on it, quasi-static."""
+    return _follows_timeline(ob) and not _busy(ob)
+
+
+def _follows_timeline(ob: bpy.types.Object) -> bool:
+    """:func:`driven` but for a job running on ``ob``."""
     props = getattr(ob, "curved_fold_mesh", None)
     if props is None or not props.is_fold_mesh or ob.type != "MESH" or not animated(ob):
         return False
     if ob.mode == "EDIT":  # being edited: its vertices are the user's until Edit Mode is left (a traceback per frame)
         return False
-    job = jobs.running_job(ob.name)
-    if props.solver_mode == "DYNAMIC" or (job is not None and not job.kind.startswith(FRAME_JOB)):
+    if props.solver_mode == "DYNAMIC":
         return False
     return not (bake.baked_frames(ob) and not bake.is_stale(ob))
+
+
+def _busy(ob: bpy.types.Object) -> bool:
+    """Whether a job other than a frame job (a live re-fold, an export, a Re-fold) runs on ``ob``."""
+    job = jobs.running_job(ob.name)
+    return job is not None and not job.kind.startswith(FRAME_JOB)
 
 
 FRAME_JOB = "folding frame"
@@ -437,32 +449,80 @@ def fold_to_frame(ob: bpy.types.Object, frame: int, *, scene=None) -> CachedFram
 @persistent
 def on_frame_change(scene, depsgraph=None) -> None:
     """``frame_change_post``: fold every driven fold object of ``scene`` to the new frame. Errors go to the
-    object's message (a bad frame must not break playback)."""
+    object's message (a bad frame must not break playback). An object another job runs on (a live re-fold, an
+    export) is passed by and folded to the frame the timeline is on when that job ends (:func:`catch_up`)."""
     sliced = interactive()
     started = False
     for ob in list(scene.objects):
-        frame = scene.frame_current
-        try:
-            if not driven(ob):
-                continue
-            jobs.stop_live(ob)  # an earlier frame's job: this frame supersedes it
-            if sliced:
-                entry = cache_for(ob).get(frame, percent_at(ob, frame), ob.curved_fold_mesh)
-                if entry is None or not (entry.converged or entry.full):
-                    _frame_jobs.append(jobs.start(frame_job(ob, frame, scene=scene)))
-                    started = True
-                    continue
-                mesh_object.update_positions(ob, entry.positions, scene=scene)
-            else:
-                entry = fold_to_frame(ob, frame, scene=scene)
-        except folding.engine_errors() as exc:
-            ob.curved_fold_mesh.last_message = f"frame {frame}: {exc}"
+        if not _follows_timeline(ob):
             continue
-        _say_frame(ob.curved_fold_mesh, frame, entry)
+        if _busy(ob):
+            _missed[ob.session_uid] = (jobs.ObjectHandle(ob), scene.name)
+            continue
+        started |= _show_frame(ob, scene, sliced)
     # the new jobs' first slice here, one budget shared (a frame a few iterations from a solved one ends in it);
     # the rest on the timer
-    if started and drive_frames() and not bpy.app.timers.is_registered(_drive):
+    if started:
+        _drive_on()
+    if _missed and not bpy.app.background and not bpy.app.timers.is_registered(_catch_up):
+        bpy.app.timers.register(_catch_up, first_interval=CATCH_UP_S)
+
+
+def _show_frame(ob: bpy.types.Object, scene, sliced: bool) -> bool:
+    """Fold ``ob`` (driven) to ``scene``'s current frame: from the cache, synchronously, or (``sliced``) by a frame
+    job whose first slice is left to the caller (:func:`_drive_on`). True when a frame job was started."""
+    frame = scene.frame_current
+    try:
+        jobs.stop_live(ob)  # an earlier frame's job: this frame supersedes it
+        if sliced:
+            entry = cache_for(ob).get(frame, percent_at(ob, frame), ob.curved_fold_mesh)
+            if entry is None or not (entry.converged or entry.full):
+                _frame_jobs.append(jobs.start(frame_job(ob, frame, scene=scene)))
+                return True
+            mesh_object.update_positions(ob, entry.positions, scene=scene)
+        else:
+            entry = fold_to_frame(ob, frame, scene=scene)
+    except folding.engine_errors() as exc:
+        ob.curved_fold_mesh.last_message = f"frame {frame}: {exc}"
+        return False
+    _say_frame(ob.curved_fold_mesh, frame, entry)
+    return False
+
+
+def _drive_on() -> None:
+    """One slice of the frame jobs now, the rest on the timer (:func:`_drive`)."""
+    if drive_frames() and not bpy.app.timers.is_registered(_drive):
         bpy.app.timers.register(_drive, first_interval=0.0)
+
+
+_missed: dict[int, tuple[jobs.ObjectHandle, str]] = {}
+"""Objects a frame change passed by because another job ran on them: ``session_uid`` → (the object, its scene's
+name). A frame stepped to during a live re-fold or an export was ignored, and after the job the object showed the
+old frame's shape at the new frame until the next frame change (a reviewer session)."""
+
+CATCH_UP_S = 0.1
+"""How often (s) the timer of :func:`catch_up` looks whether the jobs that made frame changes pass by have ended."""
+
+
+def catch_up() -> bool:
+    """Fold each object a frame change passed by (:data:`_missed`) to the frame its scene is on, once no other job
+    runs on it: as a frame change would (a frame job in the interface, synchronously else). Returns True while
+    some still wait for their job (the timer's body, :func:`_catch_up`; tests call it directly)."""
+    started = False
+    for uid, (handle, scene_name) in list(_missed.items()):
+        ob, scene = handle.get(), bpy.data.scenes.get(scene_name)
+        if ob is not None and scene is not None and _busy(ob):
+            continue
+        del _missed[uid]
+        if ob is not None and scene is not None and driven(ob):
+            started |= _show_frame(ob, scene, _ui_idle())
+    if started:
+        _drive_on()
+    return bool(_missed)
+
+
+def _catch_up() -> float | None:
+    return CATCH_UP_S if catch_up() else None
 
 
 FRAME_NOTE = "not converged in"
@@ -492,6 +552,7 @@ def on_load(*_args) -> None:
     """A file was loaded: jobs and caches belong to the previous one."""
     jobs.cancel_all()
     _frame_jobs.clear()
+    _missed.clear()
     _caches.clear()
 
 
@@ -502,6 +563,7 @@ def on_undo(*_args) -> None:
     of type Scene has been removed)" (a designer session); the undo then takes the scene back as it does."""
     jobs.cancel_all()
     _frame_jobs.clear()
+    _missed.clear()
 
 
 @persistent
@@ -539,8 +601,10 @@ def unregister_extra() -> None:
         app_handlers.detach(getattr(bpy.app.handlers, name), on_undo)
     for name, function in SAVE_HANDLERS:
         app_handlers.detach(getattr(bpy.app.handlers, name), function)
-    if bpy.app.timers.is_registered(_drive):
-        bpy.app.timers.unregister(_drive)
+    for timer in (_drive, _catch_up):
+        if bpy.app.timers.is_registered(timer):
+            bpy.app.timers.unregister(timer)
     jobs.cancel_all()
     _frame_jobs.clear()
+    _missed.clear()
     _caches.clear()

@@ -351,7 +351,7 @@ def test_a_frame_change_from_python_stays_synchronous(folded, extension, monkeyp
     # Called as Blender calls it, with no Python frame below the handler (a thread started from C): left to a timer.
     seen, looked, pause = [], [], threading.Event()
     monkeypatch.setattr(timeline, "_ui_idle", lambda: seen.append(timeline._called_from_python()) or False)
-    monkeypatch.setattr(timeline, "driven", lambda o: looked.append(o.name) and False)  # touch nothing
+    monkeypatch.setattr(timeline, "_follows_timeline", lambda o: looked.append(o.name) and False)  # touch nothing
     n_objects = len(scene.objects)
     _thread.start_new_thread(timeline.on_frame_change, (scene,))
     for _ in range(500):  # until the handler has looked at every object: it has nothing left to do
@@ -446,6 +446,54 @@ def test_a_frame_job_gives_way_to_the_users_next_step_whatever_it_is(folded, ext
     ob.curved_fold_mesh.solver_mode = "DYNAMIC"
     assert not timeline.drive_frames() and job.state == "cancelled"
     assert np.array_equal(positions_mm(ob), shown5)
+
+
+def test_a_frame_stepped_to_while_another_job_runs_is_folded_when_it_ends(folded, extension, monkeypatch, tmp_path):
+    """A frame the user stepped to while an export or a live re-fold ran on the object was passed by, and after
+    that job the object showed the old frame's shape at the new frame until the next frame change (a reviewer
+    session). Now the object is folded to the frame the timeline is on once the job ends; an object deleted or
+    baked meanwhile is let go."""
+    ob, _, _ = folded
+    scene = bpy.context.scene
+    timeline = mod(extension, "scene.timeline")
+    jobs = mod(extension, "scene.jobs")
+    export = mod(extension, "scene.export")
+    keyframe_percent(ob, {1: 10.0, 9: 90.0})
+    scene.frame_set(5)  # from Python: solved at once
+    shown5 = positions_mm(ob)
+    monkeypatch.setattr(jobs, "SLICE_MS", 0.0)
+    monkeypatch.setattr(timeline, "interactive", lambda: True)
+    monkeypatch.setattr(timeline, "_ui_idle", lambda: True)
+    for make in (
+        lambda: export.export_job(ob, tmp_path / "during.fold", scene=scene),
+        lambda: mod(extension, "scene.folding").refold_job(ob, rebuild=False, warm_start=True, live=True),
+    ):
+        ob.curved_fold_mesh.crease_stiffness *= 1.5  # (the live re-fold's edit; frame 8 is not in the cache)
+        other = jobs.start(make())
+        jobs.run_slice(other, 0.0)
+        scene.frame_set(8)  # the user steps on: passed by while the other job runs
+        assert jobs.running_job(ob.name) is other and timeline.catch_up()  # still waiting for it
+        jobs.run_to_end(other)
+        assert other.state == "done"
+        assert not timeline.catch_up()  # the other job is over: frame 8's job starts
+        job8 = jobs.running_job(ob.name)
+        assert job8 is not None and job8.kind == "folding frame 8"
+        while timeline.drive_frames():
+            pass
+        frame8 = timeline.cache_for(ob).frames[8].positions
+        np.testing.assert_allclose(positions_mm(ob), frame8, atol=1e-3)
+        assert not np.allclose(frame8, shown5, atol=1e-2)
+        scene.frame_set(5)
+        while timeline.drive_frames():
+            pass
+    # deleted while the job runs: let go
+    other = jobs.start(export.export_job(ob, tmp_path / "gone.fold", scene=scene))
+    jobs.run_slice(other, 0.0)
+    scene.frame_set(7)
+    assert timeline._missed
+    jobs.run_to_end(other)
+    bpy.data.objects.remove(ob)
+    assert not timeline.catch_up() and not timeline._missed and not timeline.drive_frames()
 
 
 def test_a_frame_that_does_not_converge_in_the_whole_budget_is_not_solved_again(folded, extension, monkeypatch):

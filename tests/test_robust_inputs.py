@@ -271,6 +271,33 @@ def test_a_crease_that_stops_just_short_of_the_border_is_drawn_onto_it() -> None
         assert report["converged"] and not report["does_not_fold_as_assigned"], report["warnings"]
 
 
+def test_two_creases_drawn_to_one_border_point_and_stopping_short_meet_there() -> None:
+    """Two creases drawn by eye towards one point of the border, stopping 0.1 and 0.5 mm short of it, interleaved
+    (the second ends beside the first): moved straight onto the border, the second crossed the first and the pattern
+    was refused ("edges … cross or touch"). Now it lands where the first did, both ends named in the warning; an end
+    that no clear landing is left for stays where it is drawn, with a warning saying so."""
+    body = (
+        '<path id="a" d="M30 50 L50.1 99.5" stroke="#f00"/><path id="b" d="M70 50 L50 99.9" stroke="#f00"/>'
+        '<path id="c" d="M0 50 L100 50" stroke="#00f"/>'
+    )
+    p = pattern_of(BORDER + body)
+    [moved] = [w for w in p.warnings if "short of the border" in w]
+    assert moved.startswith("2 crease end(s) stopped short of the border and were moved onto it (0.1 mm at (50.000, ")
+    low = np.unique(p.edges[p.assignments == "M"])
+    low = low[p.vertices[low, 1] < -99.0]
+    assert len(low) == 1 and np.allclose(p.vertices[low[0]], (50.0, -100.0))  # one border point, both creases
+    assert_folds_finite(p, angle=90)
+    # a stroke 0.5 mm inside the border with a crease between them: no landing is clear, it stays as drawn
+    beside = pattern_of(
+        BORDER + '<path id="d" d="M0 99.7 L60 100" stroke="#00f"/><path id="a" d="M20 99.5 L30 99.5" stroke="#f00"/>'
+    )
+    assert [w for w in beside.warnings if "short of the border" in w] == [
+        "2 crease end(s) stop short of the border at (20.000, -99.500), (30.000, -99.500) mm, where moving them onto "
+        "it would cross or touch another crease: left where drawn (they end inside the paper); draw them to the border"
+    ]
+    assert_folds_finite(beside, angle=90)
+
+
 def test_creases_drawn_onto_a_curved_hole_are_not_said_to_stop_short() -> None:
     """A designer's radial creases drawn exactly onto a round hole (150 mm sheet, r = 10) end on the circle, up to
     the tolerance off its chords: at a 5 mm interval they were moved onto the chord with a warning to "draw creases

@@ -1599,10 +1599,11 @@ def _clip_to_border(
     size: float,
     tolerances: tuple[float, float],
     warnings: list[str],
+    left: list[np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Step 4: refuse a self-crossing border, warn about an open one, remove crease pieces outside a closed one and
     move crease ends just short of it onto it (:func:`_snap_short_ends`; ``size``: the sheet's; ``tolerances``:
-    the merge tolerance and the curves' tolerance)."""
+    the merge tolerance and the curves' tolerance; ``left`` gets the ends that could not be moved)."""
     attrs = _stray_border_as_cuts(verts, edges, attrs, pieces, sources, warnings)
     reach = SHORT_OF_BORDER_FRACTION * size
     edges, attrs, past = _trim_border_stubs(verts, edges, attrs, pieces, sources, reach, warnings)
@@ -1639,7 +1640,7 @@ def _clip_to_border(
         keep = np.ones(len(edges), bool)
         keep[outside] = False
         edges, attrs = edges[keep], attrs[keep]
-    return _snap_short_ends(verts, edges, attrs, pieces, sources, size, tolerances, warnings)
+    return _snap_short_ends(verts, edges, attrs, pieces, sources, size, tolerances, warnings, left)
 
 
 def _border_degree(n: int, edges: np.ndarray, attrs: np.ndarray, pieces: _Pieces) -> tuple[np.ndarray, np.ndarray]:
@@ -1841,6 +1842,58 @@ class _EndMover:
         return True
 
 
+def _untangled_landing(
+    mover: _EndMover, w: int, side: int, border: np.ndarray, foot: np.ndarray, dist: np.ndarray, reach: float
+) -> int | None:
+    """Which border piece (an index into ``border``) the free end ``side`` of edge ``w`` lands on when moved onto
+    the border (:func:`_snap_short_ends`): the nearest point of the border (``foot``, ``dist`` per piece), or, where
+    the moved end would cross or touch another stroke (:func:`_join_tangles`), the nearest end of a border piece
+    within ``reach`` that it would not (two creases drawn towards one point of the border, stopping short of it
+    interleaved, meet there); None where no landing within ``reach`` is clear. Moved straight onto the border, the
+    end of a crease drawn by eye beside another crossed it and the pattern was refused: "edges … cross" (two
+    lines drawn to a border point, stopping 0.1 and 0.5 mm short)."""
+    pts, all_e, _ = mover.current()
+    tip_v, back_v = int(mover.edges[w, side]), int(mover.edges[w, 1 - side])
+    obstacle = np.ones(len(all_e), dtype=bool)
+    obstacle[w] = False
+    tol = mover.merge_tolerance
+    k = int(np.argmin(dist))
+    dest_v, dest = mover.destination(int(border[k]), foot[k])
+    if not _join_tangles(pts, all_e, obstacle, (back_v, tip_v), (int(border[k]), dest_v), dest, tol):
+        return k
+    ends = all_e[border]  # (pieces, 2): the border's vertices, each with a piece it bounds
+    near = np.linalg.norm(pts[ends] - pts[tip_v], axis=-1)  # (pieces, 2)
+    for flat in np.argsort(near, axis=None, kind="stable"):
+        piece, end = divmod(int(flat), 2)
+        if near[piece, end] > reach:
+            break
+        vertex = int(ends[piece, end])
+        if vertex == back_v:
+            continue
+        if not _join_tangles(pts, all_e, obstacle, (back_v, tip_v), (int(border[piece]), vertex), pts[vertex], tol):
+            foot[piece], dist[piece] = pts[vertex], near[piece, end]
+            return piece
+    return None
+
+
+def _warn_left_short(
+    verts: np.ndarray, edges: np.ndarray, assign: np.ndarray, left: list[np.ndarray], warnings: list[str]
+) -> None:
+    """Warn about the crease ends :func:`_snap_short_ends` left short of the border (``left``) that are still free
+    ends after the near-miss join: they end inside the paper."""
+    if not left:
+        return
+    which, sides = _loose_ends(edges, assign, len(verts))
+    free = verts[edges[which, sides]]
+    still = [q for q in left if len(free) and float(np.min(np.hypot(*(free - q).T))) == 0.0]
+    if still:
+        where = ", ".join(f"({q[0]:.3f}, {q[1]:.3f})" for q in still[:4])
+        warnings.append(
+            f"{len(still)} crease end(s) stop short of the border at {where} mm, where moving them onto it would "
+            f"cross or touch another crease: left where drawn (they end inside the paper); draw them to the border"
+        )
+
+
 def _loose_ends(edges: np.ndarray, assign: np.ndarray, n_verts: int) -> tuple[np.ndarray, np.ndarray]:
     """Free ends of creases: ``(edge, side)`` index arrays of segment ends at a vertex of degree 1. Not of cuts: the
     paper between a cut's end and the border or another cut is a bridge that holds a flap (a kirigami tab), and
@@ -1859,6 +1912,7 @@ def _snap_short_ends(
     size: float,
     tolerances: tuple[float, float],
     warnings: list[str],
+    left: list[np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Step 4 (end): free ends of creases (not cuts: :func:`_loose_ends`) that stop just short of the closed border
     (within :data:`SHORT_OF_BORDER_FRACTION` of the sheet) are moved onto it, at the nearest point of the border (a
@@ -1870,7 +1924,11 @@ def _snap_short_ends(
     Drawn "to the edge" by eye, a crease often stops a few tenths of a millimetre short. Left there, it ended inside
     the paper at both ends and could not fold without stretching it: the verdict said the pattern "does not fold as
     assigned" although the crease folded (a 150 mm sheet, gaps of 0.1 mm), and an end exactly at the merge
-    tolerance was joined to the border while the other, 1e-14 mm farther, was not."""
+    tolerance was joined to the border while the other, 1e-14 mm farther, was not.
+
+    An end that would cross or touch another stroke wherever it landed (:func:`_untangled_landing`) stays where it
+    is; its position goes to ``left`` (the near-miss join may still draw it onto the stroke ahead of it;
+    :func:`_warn_left_short` names those that stay inside the paper)."""
     assign = pieces.assignment[attrs]
     which, sides = _loose_ends(edges, assign, len(verts))
     if not len(which):
@@ -1885,16 +1943,24 @@ def _snap_short_ends(
     merge_tolerance, tolerance = tolerances
     mover = _EndMover(verts, edges, attrs, merge_tolerance)
     moved: list[tuple[float, np.ndarray, int]] = []
-    for w, side in zip(which[short], sides[short], strict=True):  # the border as split by the ends before
+    left = [] if left is None else left
+    order = np.argsort(gaps[short], kind="stable")  # nearest first: an end beside one moved before can land with it
+    for w, side in zip(which[short][order], sides[short][order], strict=True):  # the border as split before
         pts, all_e, all_a = mover.current()
         border = np.flatnonzero(pieces.assignment[all_a] == "B")
         p = pts[edges[w, side]]
         a, b = pts[all_e[border, 0]], pts[all_e[border, 1]]
         foot = segment_foot(np.broadcast_to(p, a.shape), a, b)
         dist = np.hypot(*(p - foot).T)
-        k = int(np.argmin(dist))
-        quiet = tolerance if pieces.from_curve[all_a[border[k]]] else merge_tolerance  # a chord, or the drawn line
-        if mover.move(w, side, int(border[k]), foot[k]) and dist[k] > max(quiet, merge_tolerance) * (1.0 + 1e-6):
+        k = _untangled_landing(mover, w, side, border, foot, dist, reach)
+        if k is None:
+            left.append(p)
+            continue
+        target, at = int(border[k]), foot[k]
+        quiet = tolerance if pieces.from_curve[all_a[target]] else merge_tolerance  # a chord, or the drawn line
+        if mover.move(w, side, target, at, snap=float(dist[k])) and dist[k] > max(quiet, merge_tolerance) * (
+            1.0 + 1e-6
+        ):
             moved.append((float(dist[k]), p, int(attrs[w])))
     if moved:
         where = ", ".join(f"{g:.2g} mm at ({q[0]:.3f}, {q[1]:.3f})" for g, q, _ in moved[:4])
@@ -2199,12 +2265,14 @@ def discretize_steps(
     yield "planar arrangement"
     edges, attrs = _remove_duplicates(edges, attrs, pieces, sources, warnings)
     size = sheet_size(curves)
+    left_short: list[np.ndarray] = []
     verts, edges, attrs = _clip_to_border(
-        verts, edges, attrs, pieces, sources, size, (merge_tolerance, tolerance), warnings
+        verts, edges, attrs, pieces, sources, size, (merge_tolerance, tolerance), warnings, left_short
     )
     verts, edges, attrs = _join_near_misses(
         verts, edges, attrs, pieces, sources, size, (merge_tolerance, tolerance), warnings
     )
+    _warn_left_short(verts, edges, pieces.assignment[attrs], left_short, warnings)
     # an end moved onto the border, or onto another stroke, can lay its last piece along a piece already there
     edges, attrs = _remove_duplicates(edges, attrs, pieces, sources, warnings)
     yield "clipped to the border"

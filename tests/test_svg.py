@@ -404,6 +404,22 @@ def test_percentages_are_of_the_viewport_and_font_units_are_refused() -> None:
         parse_svg_text(svg('<line stroke="red" x1="3furlongs"/>'), "f.svg")
 
 
+@pytest.mark.parametrize("size", ["0.15m", "15foo", "10em", "150 mm wide"])
+def test_a_sheet_size_that_is_not_an_svg_length_is_refused(size: str) -> None:
+    """The root's width in metres (not an SVG unit), in em or with a typo was read as no size: the sheet folded at
+    the viewBox's pixel size (39.7 mm instead of 150 mm), silently, where the same unit on a shape is refused (a
+    designer session). One line now names it; ``auto``, a percentage or no width still take the viewBox's size."""
+    head = f'viewBox="0 0 150 150" width="{size}" height="150mm"'
+    with pytest.raises(PatternError) as refused:
+        parse_svg_text(svg('<line stroke="red" x2="10"/>', head), "s.svg")
+    message = str(refused.value)
+    assert message.startswith(f"s.svg: <svg> width={size!r} is not a length the sheet's size can be read from: give a")
+    assert message.endswith("(m is not an SVG unit: write it in mm)") == (size == "0.15m")
+    for fine in ("auto", "100%", ""):
+        d = parse_svg_text(svg('<line stroke="red" x2="10"/>', f'viewBox="0 0 150 150" width="{fine}"'), "s.svg")
+        assert d.width_mm == pytest.approx(150 * PX_MM)
+
+
 def test_viewbox_origin_and_aspect_ratio_meet() -> None:
     head = 'viewBox="10 10 100 50" width="100mm" height="100mm"'  # meet: scale 1, centred vertically (+25 mm)
     d = parse_svg_text(svg('<line stroke="red" x1="10" y1="10" x2="110" y2="60"/>', head), "u.svg")

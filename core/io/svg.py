@@ -1016,17 +1016,26 @@ def _shape_subpaths(
 # ----------------------------------------------------------------------------------------------------- viewport
 
 
-def _length_mm(value: str | None) -> tuple[float | None, bool]:
-    """(millimetres, has a physical unit) for a width/height value; (None, False) if absent or a percentage."""
-    if value is None:
+def _length_mm(value: str | None, name: str = "width", where: str = "SVG <svg>") -> tuple[float | None, bool]:
+    """(millimetres, has a physical unit) for the root's width/height ``name``; (None, False) if absent, ``auto`` or
+    a percentage (the viewBox then gives the size). Anything else that is not an SVG length is refused: a size in
+    metres (``0.15m``, not an SVG unit), in ``em`` or with a typo was read as no size at all and the sheet folded at
+    the viewBox's pixel size (39.7 mm instead of 150 mm, no word; a designer session), where the same unit on a
+    shape is refused."""
+    if value is None or value.strip() in ("", "auto"):
         return None, False
     m = _QUANTITY.fullmatch(value.strip())
-    if not m:
+    unit = m.group(2).lower() if m else ""
+    if m and unit == "%":
         return None, False
-    unit = m.group(2).lower()
-    if unit == "%" or unit not in UNIT_MM:
-        return None, False
-    return float(m.group(1)) * UNIT_MM[unit], unit not in ("", "px")
+    if m and unit in UNIT_MM:
+        return float(m.group(1)) * UNIT_MM[unit], unit not in ("", "px")
+    shown = value if len(value) <= 40 else value[:37] + "..."
+    hint = f" ({unit} is not an SVG unit: write it in mm)" if m and unit in ("m", "km", "um", "µm", "nm") else ""
+    raise PatternError(
+        f"{where}: <svg> {name}={shown!r} is not a length the sheet's size can be read from: give a number with "
+        f"px, mm, cm, in, pt, pc or Q (or leave it out and let the viewBox give the size){hint}"
+    )
 
 
 def _viewbox(elem: _Element, where: str) -> tuple[float, float, float, float] | None:
@@ -1101,8 +1110,8 @@ def _viewport(root: _Element, where: str) -> tuple[np.ndarray, float, float, tup
     fall back to the viewBox size in px. Without one, a user unit is a px. The result ends with the flip
     (x, y) → (x, −y).
     """
-    w_mm, _ = _length_mm(root.attrib.get("width"))
-    h_mm, _ = _length_mm(root.attrib.get("height"))
+    w_mm, _ = _length_mm(root.attrib.get("width"), "width", where)
+    h_mm, _ = _length_mm(root.attrib.get("height"), "height", where)
     for name, value in (("width", w_mm), ("height", h_mm)):
         if value is not None and not math.isfinite(value):  # 1e400mm: inf, then nan coordinates
             raise PatternError(f"{where}: {name}={root.attrib.get(name)!r} is not a finite length")

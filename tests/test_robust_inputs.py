@@ -233,6 +233,10 @@ def test_a_hole_drawn_as_a_closed_cut_is_reported_as_a_loose_piece() -> None:
     cut = fold_pattern(pattern_of(BORDER + crease + "\n" + hole.format("#0f0")), angle=90).report
     [warning] = [w for w in cut["warnings"] if "separate pieces" in w]
     assert warning.startswith("the sheet is in 2 separate pieces") and "around (60.000, -50.000) mm" in warning
+    # two straight cuts from the edge meeting inside cut a wedge free: the warning speaks of cuts, not only of holes
+    wedge = BORDER + '\n<path d="M100 20 L60 50 L100 80" stroke="#0f0"/>'
+    [warning] = [w for w in fold_pattern(pattern_of(wedge), angle=90).report["warnings"] if "separate pieces" in w]
+    assert "each folds on its own — cuts (green) that close around a part cut it free; for a hole" in warning
     for body in (BORDER + crease + "\n" + hole.format("#000"), BORDER + crease):
         assert not any("separate pieces" in w for w in fold_pattern(pattern_of(body), angle=90).report["warnings"])
 

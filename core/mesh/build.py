@@ -148,8 +148,8 @@ def _warn_separate_pieces(verts: np.ndarray, tris: np.ndarray, warnings: list[st
     more = f" and {len(pieces) - 4} more" if len(pieces) > 4 else ""
     warnings.append(
         f"the sheet is in {len(pieces)} separate pieces (the largest has {count[order[0]]} vertices; the others: "
-        f"{'; '.join(smaller)}{more}): each folds on its own — a hole drawn as a closed cut leaves its disc as a loose "
-        "piece; draw a hole's outline as a border (black) instead"
+        f"{'; '.join(smaller)}{more}): each folds on its own — cuts (green) that close around a part cut it free; "
+        "for a hole, draw its outline as a border (black): a closed cut leaves its disc as a loose piece"
     )
 
 

@@ -1958,9 +1958,7 @@ def _snap_short_ends(
             continue
         target, at = int(border[k]), foot[k]
         quiet = tolerance if pieces.from_curve[all_a[target]] else merge_tolerance  # a chord, or the drawn line
-        if mover.move(w, side, target, at, snap=float(dist[k])) and dist[k] > max(quiet, merge_tolerance) * (
-            1.0 + 1e-6
-        ):
+        if mover.move(w, side, target, at) and dist[k] > max(quiet, merge_tolerance) * (1.0 + 1e-6):
             moved.append((float(dist[k]), p, int(attrs[w])))
     if moved:
         where = ", ".join(f"{g:.2g} mm at ({q[0]:.3f}, {q[1]:.3f})" for g, q, _ in moved[:4])

@@ -334,6 +334,15 @@ def running_job(owner: str) -> Job | None:
     return job if job is not None and job.running else None
 
 
+def job_on(ob: bpy.types.Object) -> Job | None:
+    """The job running on ``ob``: the one owned by its name, else one whose preview changes it (a job started
+    before the object was renamed is owned by the old name)."""
+    job = running_job(ob.name)
+    if job is not None:
+        return job
+    return next((j for j in _jobs.values() if j.running and _previews(j, ob.session_uid)), None)
+
+
 def free_owner(name: str) -> str:
     """An owner for a job that makes a new object called ``name``: ``name`` itself, or the first ``name.001``,
     ``name.002`` … that no object has and no job owns (Blender numbers the new object so when the name is taken).

@@ -304,7 +304,7 @@ def _follows_timeline(ob: bpy.types.Object) -> bool:
 
 def _busy(ob: bpy.types.Object) -> bool:
     """Whether a job other than a frame job (a live re-fold, an export, a Re-fold) runs on ``ob``."""
-    job = jobs.running_job(ob.name)
+    job = jobs.job_on(ob)
     return job is not None and not job.kind.startswith(FRAME_JOB)
 
 
@@ -457,7 +457,7 @@ def on_frame_change(scene, depsgraph=None) -> None:
         if not _follows_timeline(ob):
             continue
         if _busy(ob):
-            _missed[ob.session_uid] = (jobs.ObjectHandle(ob), scene.name)
+            _missed[ob.session_uid] = (jobs.ObjectHandle(ob), scene.session_uid)
             continue
         started |= _show_frame(ob, scene, sliced)
     # the new jobs' first slice here, one budget shared (a frame a few iterations from a solved one ends in it);
@@ -495,10 +495,10 @@ def _drive_on() -> None:
         bpy.app.timers.register(_drive, first_interval=0.0)
 
 
-_missed: dict[int, tuple[jobs.ObjectHandle, str]] = {}
+_missed: dict[int, tuple[jobs.ObjectHandle, int]] = {}
 """Objects a frame change passed by because another job ran on them: ``session_uid`` → (the object, its scene's
-name). A frame stepped to during a live re-fold or an export was ignored, and after the job the object showed the
-old frame's shape at the new frame until the next frame change (a reviewer session)."""
+``session_uid``). A frame stepped to during a live re-fold or an export was ignored, and after the job the object
+showed the old frame's shape at the new frame until the next frame change (a reviewer session)."""
 
 CATCH_UP_S = 0.1
 """How often (s) the timer of :func:`catch_up` looks whether the jobs that made frame changes pass by have ended."""
@@ -509,16 +509,24 @@ def catch_up() -> bool:
     runs on it: as a frame change would (a frame job in the interface, synchronously else). Returns True while
     some still wait for their job (the timer's body, :func:`_catch_up`; tests call it directly)."""
     started = False
-    for uid, (handle, scene_name) in list(_missed.items()):
-        ob, scene = handle.get(), bpy.data.scenes.get(scene_name)
-        if ob is not None and scene is not None and _busy(ob):
+    for uid, (handle, scene_uid) in list(_missed.items()):
+        ob = handle.get()
+        if ob is not None and _busy(ob):
             continue
         del _missed[uid]
-        if ob is not None and scene is not None and driven(ob):
+        scene = _scene_of(ob, scene_uid) if ob is not None else None
+        if scene is not None and driven(ob):
             started |= _show_frame(ob, scene, _ui_idle())
     if started:
         _drive_on()
     return bool(_missed)
+
+
+def _scene_of(ob: bpy.types.Object, scene_uid: int):
+    """The scene whose frame ``ob`` follows: the one it was passed by in (found by ``session_uid``: a rename keeps
+    it), else the first it is in now (moved meanwhile); None when it is in none."""
+    scenes = list(ob.users_scene)
+    return next((s for s in scenes if s.session_uid == scene_uid), scenes[0] if scenes else None)
 
 
 def _catch_up() -> float | None:

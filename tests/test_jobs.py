@@ -486,6 +486,35 @@ def test_a_frame_stepped_to_while_another_job_runs_is_folded_when_it_ends(folded
         scene.frame_set(5)
         while timeline.drive_frames():
             pass
+    # the object and the scene renamed while the job runs: still waited for (no frame job beside the export), then
+    # caught up; the object moved to another scene meanwhile follows that scene's frame
+    other = jobs.start(export.export_job(ob, tmp_path / "renamed.fold", scene=scene))
+    jobs.run_slice(other, 0.0)
+    ob.name, scene.name = "Renamed mid-export", "Renamed scene"
+    scene.frame_set(8)
+    assert timeline.catch_up() and [j.kind for j in jobs._jobs.values() if j.running] == ["exporting"]
+    jobs.run_to_end(other)
+    assert not timeline.catch_up()
+    while timeline.drive_frames():
+        pass
+    np.testing.assert_allclose(positions_mm(ob), timeline.cache_for(ob).frames[8].positions, atol=1e-3)
+    other = jobs.start(export.export_job(ob, tmp_path / "moved.fold", scene=scene))
+    jobs.run_slice(other, 0.0)
+    scene.frame_set(5)
+    elsewhere = bpy.data.scenes.new("Elsewhere")
+    elsewhere.frame_current = 6
+    elsewhere.collection.objects.link(ob)
+    for collection in list(ob.users_collection):
+        if collection is not elsewhere.collection:
+            collection.objects.unlink(ob)
+    jobs.run_to_end(other)
+    assert not timeline.catch_up()
+    while timeline.drive_frames():
+        pass
+    np.testing.assert_allclose(positions_mm(ob), timeline.cache_for(ob).frames[6].positions, atol=1e-3)
+    for collection in list(ob.users_collection):
+        collection.objects.unlink(ob)
+    scene.collection.objects.link(ob)
     # deleted while the job runs: let go
     other = jobs.start(export.export_job(ob, tmp_path / "gone.fold", scene=scene))
     jobs.run_slice(other, 0.0)

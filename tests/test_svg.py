@@ -415,7 +415,7 @@ def test_a_sheet_size_that_is_not_an_svg_length_is_refused(size: str) -> None:
     message = str(refused.value)
     assert message.startswith(f"s.svg: <svg> width={size!r} is not a length the sheet's size can be read from: give a")
     assert message.endswith("(m is not an SVG unit: write it in mm)") == (size == "0.15m")
-    for fine in ("auto", "100%", ""):
+    for fine in ("auto", "AUTO", "100%", ""):
         d = parse_svg_text(svg('<line stroke="red" x2="10"/>', f'viewBox="0 0 150 150" width="{fine}"'), "s.svg")
         assert d.width_mm == pytest.approx(150 * PX_MM)
 

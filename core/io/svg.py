@@ -1022,7 +1022,7 @@ def _length_mm(value: str | None, name: str = "width", where: str = "SVG <svg>")
     metres (``0.15m``, not an SVG unit), in ``em`` or with a typo was read as no size at all and the sheet folded at
     the viewBox's pixel size (39.7 mm instead of 150 mm, no word; a designer session), where the same unit on a
     shape is refused."""
-    if value is None or value.strip() in ("", "auto"):
+    if value is None or value.strip().lower() in ("", "auto"):
         return None, False
     m = _QUANTITY.fullmatch(value.strip())
     unit = m.group(2).lower() if m else ""

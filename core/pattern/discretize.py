@@ -1857,9 +1857,16 @@ def _untangled_landing(
     obstacle = np.ones(len(all_e), dtype=bool)
     obstacle[w] = False
     tol = mover.merge_tolerance
+    # a piece that already passes within the tolerance of a vertex as drawn (its start beside a vertex of a curved
+    # border's chords) is judged by crossings only: that touch is the drawing's, not the move's
+    drawn = _join_tangles(pts, all_e, obstacle, (back_v, tip_v), (w, tip_v), pts[tip_v], tol)
+
+    def tangles(piece: int, vertex: int, at: np.ndarray) -> bool:
+        return _join_tangles(pts, all_e, obstacle, (back_v, tip_v), (piece, vertex), at, 0.0 if drawn else tol)
+
     k = int(np.argmin(dist))
     dest_v, dest = mover.destination(int(border[k]), foot[k])
-    if not _join_tangles(pts, all_e, obstacle, (back_v, tip_v), (int(border[k]), dest_v), dest, tol):
+    if not tangles(int(border[k]), dest_v, dest):
         return k
     ends = all_e[border]  # (pieces, 2): the border's vertices, each with a piece it bounds
     near = np.linalg.norm(pts[ends] - pts[tip_v], axis=-1)  # (pieces, 2)
@@ -1870,7 +1877,7 @@ def _untangled_landing(
         vertex = int(ends[piece, end])
         if vertex == back_v:
             continue
-        if not _join_tangles(pts, all_e, obstacle, (back_v, tip_v), (int(border[piece]), vertex), pts[vertex], tol):
+        if not tangles(int(border[piece]), vertex, pts[vertex]):
             foot[piece], dist[piece] = pts[vertex], near[piece, end]
             return piece
     return None
@@ -1945,21 +1952,28 @@ def _snap_short_ends(
     moved: list[tuple[float, np.ndarray, int]] = []
     left = [] if left is None else left
     order = np.argsort(gaps[short], kind="stable")  # nearest first: an end beside one moved before can land with it
-    for w, side in zip(which[short][order], sides[short][order], strict=True):  # the border as split before
-        pts, all_e, all_a = mover.current()
-        border = np.flatnonzero(pieces.assignment[all_a] == "B")
-        p = pts[edges[w, side]]
-        a, b = pts[all_e[border, 0]], pts[all_e[border, 1]]
-        foot = segment_foot(np.broadcast_to(p, a.shape), a, b)
-        dist = np.hypot(*(p - foot).T)
-        k = _untangled_landing(mover, w, side, border, foot, dist, reach)
-        if k is None:
-            left.append(p)
-            continue
-        target, at = int(border[k]), foot[k]
-        quiet = tolerance if pieces.from_curve[all_a[target]] else merge_tolerance  # a chord, or the drawn line
-        if mover.move(w, side, target, at) and dist[k] > max(quiet, merge_tolerance) * (1.0 + 1e-6):
-            moved.append((float(dist[k]), p, int(attrs[w])))
+    pending = list(zip(which[short][order].tolist(), sides[short][order].tolist(), strict=True))
+    for last_pass in (False, True):  # an end with no clear landing is tried again once the others have moved
+        waiting = []
+        for w, side in pending:  # the border as split by the ends moved before
+            pts, all_e, all_a = mover.current()
+            border = np.flatnonzero(pieces.assignment[all_a] == "B")
+            p = pts[edges[w, side]]
+            a, b = pts[all_e[border, 0]], pts[all_e[border, 1]]
+            foot = segment_foot(np.broadcast_to(p, a.shape), a, b)
+            dist = np.hypot(*(p - foot).T)
+            k = _untangled_landing(mover, w, side, border, foot, dist, reach)
+            if k is None:
+                waiting.append((w, side))
+                continue
+            target, at = int(border[k]), foot[k]
+            quiet = tolerance if pieces.from_curve[all_a[target]] else merge_tolerance  # a chord, or the drawn line
+            if mover.move(w, side, target, at) and dist[k] > max(quiet, merge_tolerance) * (1.0 + 1e-6):
+                moved.append((float(dist[k]), p, int(attrs[w])))
+        if len(waiting) == len(pending) or last_pass:
+            left.extend(mover.current()[0][edges[w, side]] for w, side in waiting)
+            break
+        pending = waiting
     if moved:
         where = ", ".join(f"{g:.2g} mm at ({q[0]:.3f}, {q[1]:.3f})" for g, q, _ in moved[:4])
         warnings.append(

@@ -56,7 +56,12 @@ class CURVED_FOLD_OT_export_folded(JobOperator, bpy.types.Operator, ExportHelper
         name="Units",
         description="Length unit of STL/OBJ files",
         items=(
-            ("AUTO", "Automatic", "Millimetres for STL (what slicers assume), metres for OBJ; glTF is always metres"),
+            (
+                "AUTO",
+                "Automatic",
+                "Millimetres for STL (what slicers assume); OBJ in the scene's unit (millimetres in a scene of 1 "
+                "unit = 1 mm, else metres), as Blender's OBJ exporter writes it; glTF is always metres",
+            ),
             ("MM", "Millimetres", "STL/OBJ lengths in millimetres"),
             ("M", "Metres", "STL/OBJ lengths in metres (Blender units)"),
         ),
@@ -132,7 +137,10 @@ class CURVED_FOLD_OT_export_folded(JobOperator, bpy.types.Operator, ExportHelper
     def make_job(self, context):
         ob = context.active_object
         self.failure = f"Export of '{ob.name}' failed"
-        unit = self.unit.lower() if self.file_format in ("OBJ", "STL") and self.unit != "AUTO" else None
+        if self.file_format in ("OBJ", "STL") and self.unit != "AUTO":
+            unit = self.unit.lower()
+        else:
+            unit = export.automatic_unit(self.filepath, context.scene)
         return export.export_job(ob, self.filepath, unit=unit, scene=context.scene)
 
     def _end_ui(self, context) -> None:

@@ -13,6 +13,7 @@ FOLD and SVG keep millimetres.
 from __future__ import annotations
 
 import contextlib
+import math
 from collections.abc import Generator, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -99,6 +100,19 @@ UNITS = {"m": 1.0, "mm": 1000.0}
 
 DEFAULT_UNIT = {".stl": "mm", ".obj": "m", ".glb": "m", ".gltf": "m", ".blend": "m"}
 """STL in millimetres (what slicers assume); glTF must be metres; OBJ keeps Blender's metres unless asked."""
+
+
+def automatic_unit(path: str | Path, scene: bpy.types.Scene | None) -> str | None:
+    """The Export Mesh operator's Automatic unit for ``path``: for OBJ the unit of ``scene``'s Blender units, as
+    Blender's own OBJ exporter writes them and its importer reads them back (millimetres in a scene of 1 unit = 1
+    mm: in metres the model came back 1,000× too small there; a designer session); else None
+    (:data:`DEFAULT_UNIT`)."""
+    if Path(path).suffix.lower() != ".obj" or scene is None:
+        return None
+    from . import mesh_object
+
+    return "mm" if math.isclose(mesh_object.mm_per_unit(scene), 1.0, rel_tol=1e-6) else None
+
 
 PAPER_RGBA = (0.93, 0.91, 0.86, 1.0)
 """Base colour of the exported paper material (an off-white sheet)."""

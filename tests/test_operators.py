@@ -431,6 +431,37 @@ def test_export_mesh_applies_solidify_in_millimetres(folded, tmp_path):
     assert '<g id="cut"' in cutter.read_text() and '<g id="score"' in cutter.read_text()
 
 
+def test_obj_export_reads_back_at_its_size_in_a_millimetre_scene(folded, tmp_path):
+    """In a scene of 1 unit = 1 mm, an OBJ exported with the Automatic unit was in metres, so Blender's OBJ importer
+    (which reads a file's numbers as Blender units) brought the model back 1,000× too small (a designer session).
+    Automatic now writes OBJ in the scene's unit, as Blender's own OBJ exporter does; metres stay the default in a
+    metre scene, and an explicit unit still wins."""
+    ob, _, _ = folded
+    scene = bpy.context.scene
+
+    def read_back(name: str, **unit) -> np.ndarray:
+        path = tmp_path / name
+        assert bpy.ops.curved_fold.export_folded(filepath=str(path), file_format="OBJ", **unit) == {"FINISHED"}
+        before = set(bpy.data.objects)
+        bpy.ops.wm.obj_import(filepath=str(path))
+        (new,) = set(bpy.data.objects) - before
+        size = world_extent(new)
+        bpy.data.objects.remove(new)
+        bpy.context.view_layer.objects.active = ob
+        return size
+
+    def world_extent(o) -> np.ndarray:
+        co = np.array([o.matrix_world @ v.co for v in o.data.vertices])
+        return np.ptp(co, axis=0)
+
+    size = world_extent(ob)
+    np.testing.assert_allclose(read_back("m.obj"), size, rtol=1e-4)  # metre scene: metres
+    scene.unit_settings.scale_length = 0.001
+    np.testing.assert_allclose(read_back("mm.obj"), size, rtol=1e-4)  # millimetre scene: millimetres
+    np.testing.assert_allclose(read_back("asked.obj", unit="M"), size / 1000.0, atol=1e-6)  # OBJ: 6 decimals
+    scene.unit_settings.scale_length = 1.0
+
+
 def test_import_svg_round_trip(folded, tmp_path):
     ob, _, _ = folded
     svg = tmp_path / "cp.svg"

@@ -300,6 +300,10 @@ def test_two_creases_drawn_to_one_border_point_and_stopping_short_meet_there() -
         "it would cross or touch another crease: left where drawn (they end inside the paper); draw them to the border"
     ]
     assert_folds_finite(beside, angle=90)
+    # six ends moved: the warning lists four places and says how many more (it listed four of "6" and stopped)
+    six = "".join(f'<path d="M{x} 0 L{x} {99.8 - 0.05 * k}" stroke="#f00"/>' for k, x in enumerate(range(10, 100, 15)))
+    [moved] = [w for w in pattern_of(BORDER + six).warnings if "short of the border" in w]
+    assert moved.startswith("6 crease end(s) stopped short of the border") and " and 2 more), from " in moved
 
 
 def test_creases_drawn_onto_a_curved_hole_are_not_said_to_stop_short() -> None:

@@ -1004,6 +1004,12 @@ def _inside_border(points: np.ndarray, border_a: np.ndarray, border_b: np.ndarra
     return out
 
 
+def _listed(texts: list[str], limit: int = 4) -> str:
+    """The first ``limit`` of ``texts`` joined by commas, and how many more there are (a warning that counted 6
+    crease ends listed 4 places and said nothing of the other 2)."""
+    return ", ".join(texts[:limit]) + (f" and {len(texts) - limit} more" if len(texts) > limit else "")
+
+
 def _describe_sources(sources: list[str], idx: np.ndarray, limit: int = 4) -> str:
     names = [sources[k] for k in dict.fromkeys(idx.tolist())]
     return ", ".join(names[:limit]) + (f" and {len(names) - limit} more" if len(names) > limit else "")
@@ -1617,7 +1623,7 @@ def _clip_to_border(
         # four or more border pieces at one point: the outline crosses or touches itself, so which side is
         # paper is ambiguous (a figure-eight outline); the designer must redraw it
         at_b = is_b & np.isin(edges, crossing).any(axis=1)
-        pts = ", ".join(f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in crossing[:4])
+        pts = _listed([f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in crossing])
         names = _describe_sources(sources, edge_poly[attrs[at_b]])
         raise PatternError(
             f"the border crosses or touches itself at {pts} mm ({names})"
@@ -1625,7 +1631,7 @@ def _clip_to_border(
         )
     open_v = np.flatnonzero(deg % 2 == 1)
     if len(open_v):
-        pts = ", ".join(f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in open_v[:4])
+        pts = _listed([f"({verts[v, 0]:.3f}, {verts[v, 1]:.3f})" for v in open_v])
         warnings.append(f"the border is not closed: {len(open_v)} loose end(s) at {pts} mm")
         return verts, edges, attrs
     others = np.flatnonzero(~is_b)
@@ -1696,12 +1702,12 @@ def _join_border_gaps(
     at = {int(v): k for k in b_idx.tolist() for v in edges[k].tolist()}
     new_attrs = np.array([attrs[at[int(loose[a])]] for a, _ in pairs], dtype=attrs.dtype)
     gaps = [float(d[a, b]) for a, b in pairs]
-    where = ", ".join(f"({verts[loose[a], 0]:.3f}, {verts[loose[a], 1]:.3f})" for a, _ in pairs[:4])
+    where = _listed([f"({verts[loose[a], 0]:.3f}, {verts[loose[a], 1]:.3f})" for a, _ in pairs])
     names = _describe_sources(sources, pieces.polyline[new_attrs])
     warnings.append(
         f"the border is not closed at {len(pairs)} place(s) ({names}): joined each pair of loose ends with a "
-        f"straight edge, up to {max(gaps):.4g} mm long, at {where}{', ...' if len(pairs) > 4 else ''} mm (make the "
-        "pieces of the outline meet where you drew them)"
+        f"straight edge, up to {max(gaps):.4g} mm long, at {where} mm (make the pieces of the outline meet where "
+        "you drew them)"
     )
     return np.concatenate([edges, new_edges]), np.concatenate([attrs, new_attrs])
 
@@ -1894,7 +1900,7 @@ def _warn_left_short(
     free = verts[edges[which, sides]]
     still = [q for q in left if len(free) and float(np.min(np.hypot(*(free - q).T))) == 0.0]
     if still:
-        where = ", ".join(f"({q[0]:.3f}, {q[1]:.3f})" for q in still[:4])
+        where = _listed([f"({q[0]:.3f}, {q[1]:.3f})" for q in still])
         warnings.append(
             f"{len(still)} crease end(s) stop short of the border at {where} mm, where moving them onto it would "
             f"cross or touch another crease: left where drawn (they end inside the paper); draw them to the border"
@@ -1975,7 +1981,7 @@ def _snap_short_ends(
             break
         pending = waiting
     if moved:
-        where = ", ".join(f"{g:.2g} mm at ({q[0]:.3f}, {q[1]:.3f})" for g, q, _ in moved[:4])
+        where = _listed([f"{g:.2g} mm at ({q[0]:.3f}, {q[1]:.3f})" for g, q, _ in moved])
         warnings.append(
             f"{len(moved)} crease end(s) stopped short of the border and were moved onto it ({where}), from "
             f"{_describe_sources(sources, pieces.polyline[[m[2] for m in moved]])}; a crease must reach the "
@@ -2220,13 +2226,13 @@ def _join_near_misses(
         keep[trimmed] = False
         trimmed_attrs = attrs[trimmed]
         edges, attrs = edges[keep], attrs[keep]
-        where = ", ".join(f"({q[0]:.3f}, {q[1]:.3f})" for q in stub_tips[:4])
+        where = _listed([f"({q[0]:.3f}, {q[1]:.3f})" for q in stub_tips])
         warnings.append(
             f"{len(trimmed)} crease piece(s) drawn a hair past a crossing (at most {reach:.2g} mm, to a free end at "
             f"{where}) were removed, from {_describe_sources(sources, pieces.polyline[trimmed_attrs])}"
         )
     if joined:
-        where = ", ".join(f"{g:.2g} mm at ({q[0]:.3f}, {q[1]:.3f})" for g, q, _ in joined[:4])
+        where = _listed([f"{g:.2g} mm at ({q[0]:.3f}, {q[1]:.3f})" for g, q, _ in joined])
         warnings.append(
             f"{len(joined)} crease end(s) stopped just short of another crease and were joined to it ({where}), "
             f"from {_describe_sources(sources, pieces.polyline[[m[2] for m in joined]])}; draw creases to meet, or "

@@ -345,6 +345,22 @@ def test_creases_drawn_onto_a_curved_hole_are_not_said_to_stop_short() -> None:
     assert any(w.startswith("1 crease end(s) stopped short of the border") for w in p.warnings), p.warnings
 
 
+def test_two_creases_overshooting_a_crossing_along_one_line_keep_their_own_sides() -> None:
+    """A valley drawn down to a curved crease and a mountain drawn up to it along the same line, each 0.3 mm past
+    it, overlap for 0.6 mm: the overlap went to the valley, so the mountain's first 0.3 mm below the crossing folded
+    as a valley (a designer session's curved Miura). Each stroke keeps its own side of the crossing now."""
+    body = (
+        '<path d="M0 50 C 30 45 70 55 100 50" stroke="#f00"/><path id="v" d="M50 0 L50 50.3" stroke="#00f"/>'
+        '<path id="m" d="M50 100 L50 49.7" stroke="#f00"/>'
+    )
+    p = pattern_of(BORDER + body)
+    on_line = np.abs(p.vertices[p.edges][:, :, 0] - 50.0).max(axis=1) < 1e-9
+    for k in np.flatnonzero(on_line):
+        mid = p.vertices[p.edges[k], 1].mean()
+        assert p.assignments[k] == ("V" if mid > -50.0 else "M"), (p.vertices[p.edges[k]], p.assignments[k])
+    assert_folds_finite(p, angle=90)
+
+
 def test_a_crease_that_just_misses_another_is_joined_to_it() -> None:
     """Drawn with snapping off (a helper's cases, 100 mm sheet, reach 1 mm): a branch that stops 0.3 mm short of the
     crease ahead of it is joined to it, and one drawn 0.3 mm past it loses the stub, each with a warning naming it;

@@ -205,7 +205,9 @@ def test_border_pieces_that_miss_at_several_corners_by_a_hair_are_joined() -> No
     """A 150 mm square drawn as four lines that miss each other by 0.1 mm at every corner (a designer session, in
     Blender and as SVG <line>s): left open, two such gaps folded nothing ("converged" in 0 iterations, no crease
     with paper on both sides) and four gave "no paper left". Each pair of loose ends that are each other's nearest,
-    within 1 % of the sheet, is joined."""
+    within 1 % of the sheet, is joined: at the corner where the two pieces' lines meet (a straight edge between the
+    ends cut a chamfer off it, and a crease drawn to the corner ended outside the sheet), or by a straight edge
+    where the pieces run on nearly straight (a border drawn in two strokes that miss mid-side)."""
     sides = [
         CreaseCurve([line((0.1, 0), (150, 0))], "B", None, source="bottom"),
         CreaseCurve([line((150, 0.1), (150, 150))], "B", None, source="right"),
@@ -217,9 +219,20 @@ def test_border_pieces_that_miss_at_several_corners_by_a_hair_are_joined() -> No
     assert _one_loop(p)
     said = [w for w in p.warnings if "not closed" in w]
     assert len(said) == 1 and said[0].startswith("the border is not closed at 4 place(s) (")
-    assert "up to 0.1414 mm long" in said[0]
+    assert "): 4 drawn on to the corner where their lines meet (up to 0.1 mm), at " in said[0]
+    outline = {tuple(np.round(p.vertices[v], 9)) for v in p.edges[p.assignments == "B"].ravel()}
+    assert {(0.0, 0.0), (150.0, 0.0), (150.0, 150.0), (0.0, 150.0)} <= outline  # the corners, not chamfers
+    diagonal = p.edges[p.assignments == "V"]
+    assert {tuple(np.round(p.vertices[v], 9)) for v in np.unique(diagonal)} >= {(0.0, 0.0), (150.0, 150.0)}
     run = fold_pattern(p, percent=0.5)
     assert run.result.converged and run.report["crease_length_not_folding_pct"] == 0
+    # two strokes that miss each other mid-side, running on straight (joined by a straight edge), and at a corner
+    halves = [
+        CreaseCurve([line((0, 0), (150, 0)), line((150, 0), (150, 150)), line((150, 150), (75.2, 150))], "B", None),
+        CreaseCurve([line((74.9, 150), (0, 150)), line((0, 150), (0, 0.2))], "B", None),
+    ]
+    [said] = [w for w in discretize(halves).warnings if "not closed" in w]
+    assert "): 1 drawn on to the corner where their lines meet (up to 0.2 mm); 1 joined by a straight edge (up " in said
 
 
 def test_slits_drawn_in_black_keep_their_bridges_and_an_outline_missing_its_start_closes() -> None:

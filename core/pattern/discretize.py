@@ -1622,7 +1622,7 @@ def _clip_to_border(
     attrs = _stray_border_as_cuts(verts, edges, attrs, pieces, sources, warnings)
     reach = SHORT_OF_BORDER_FRACTION * size
     edges, attrs, past = _trim_border_stubs(verts, edges, attrs, pieces, sources, reach, warnings)
-    edges, attrs = _join_border_gaps(verts, edges, attrs, pieces, sources, reach, warnings)
+    verts, edges, attrs = _join_border_gaps(verts, edges, attrs, pieces, sources, reach, warnings, tolerances[0])
     edge_poly = pieces.polyline
     is_b, deg = _border_degree(len(verts), edges, attrs, pieces)
     if not is_b.any():
@@ -1676,11 +1676,16 @@ def _join_border_gaps(
     sources: list[str],
     reach: float,
     warnings: list[str],
-) -> tuple[np.ndarray, np.ndarray]:
+    merge_tolerance: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Join the border's loose ends in pairs where that closes it: each the other's nearest loose end, within
     ``reach`` (:data:`SHORT_OF_BORDER_FRACTION` of the sheet), and the pieces they join left without a loose end
-    (an outline drawn as pieces that miss each other by a hair at its corners), with a straight border piece and one
-    warning. After the black lines inside the sheet became cuts (:func:`_stray_border_as_cuts`) and the stubs past
+    (an outline drawn as pieces that miss each other by a hair at its corners), with one warning. Two pieces that
+    meet at an angle are drawn on to the corner where their end pieces' lines meet (:func:`_corner_of`; the vertex
+    there within ``merge_tolerance``, a crease's end drawn to the corner, or a new one returned in the vertices),
+    others are joined by a straight border piece: the straight edge cut a tiny
+    chamfer off each corner, and a crease drawn to the corner ended outside the sheet (a designer session in
+    Blender). After the black lines inside the sheet became cuts (:func:`_stray_border_as_cuts`) and the stubs past
     its corners were trimmed: the slits of a kirigami lattice, and the paper bridges between them, stay as drawn
     (joined before the clean-up, a review session's lattice fell apart). A square drawn as four lines 0.1 mm apart
     at two corners folded nothing ("converged" in 0 iterations), at four "no paper left" (a designer session)."""
@@ -1688,14 +1693,14 @@ def _join_border_gaps(
     b_idx = np.flatnonzero(is_b)
     loose = np.flatnonzero(deg == 1)
     if len(loose) < 2 or len(loose) > MAX_GAP_ENDS:
-        return edges, attrs
+        return verts, edges, attrs
     q = verts[loose]
     d = np.hypot(*(q[:, None, :] - q[None, :, :]).transpose(2, 0, 1))
     np.fill_diagonal(d, np.inf)
     nearest = np.argmin(d, axis=1)
     pairs = [(a, int(b)) for a, b in enumerate(nearest.tolist()) if b > a and nearest[b] == a and d[a, b] <= reach]
     if not pairs:
-        return edges, attrs
+        return verts, edges, attrs
     # keep the pairs whose border pieces (joined at vertices) are left with no loose end: an outline closed
     ends = np.array(pairs, dtype=np.int64)
     group = connected_components(
@@ -1705,20 +1710,78 @@ def _join_border_gaps(
     still_open = {int(group[loose[x]]) for x in range(len(loose)) if x not in paired}
     pairs = [(a, b) for a, b in pairs if int(group[loose[a]]) not in still_open]
     if not pairs:
-        return edges, attrs
-    new_edges = np.array([[loose[a], loose[b]] for a, b in pairs], dtype=edges.dtype)
-    # each takes the attributes of the border piece at its first end (its role, source)
+        return verts, edges, attrs
+    # each new piece takes the attributes of the border piece at its first end (its role, source)
     at = {int(v): k for k in b_idx.tolist() for v in edges[k].tolist()}
-    new_attrs = np.array([attrs[at[int(loose[a])]] for a, _ in pairs], dtype=attrs.dtype)
-    gaps = [float(d[a, b]) for a, b in pairs]
+    new_verts: list[np.ndarray] = []
+    new_edges: list[tuple[int, int]] = []
+    new_attrs: list[int] = []
+    corners: list[float] = []
+    straight: list[float] = []
+    for a, b in pairs:
+        va, vb = int(loose[a]), int(loose[b])
+        attr = int(attrs[at[va]])
+        corner = _corner_of(verts, edges[at[va]], va, edges[at[vb]], vb, reach)
+        on_end = corner is not None and min(np.hypot(*(corner - verts[va])), np.hypot(*(corner - verts[vb]))) <= (
+            1e-9 * reach
+        )
+        if corner is None or on_end:  # no corner, or one piece already ends at it: the straight edge is the join
+            new_edges.append((va, vb))
+            new_attrs.append(attr)
+            (corners if on_end else straight).append(float(d[a, b]))
+            continue
+        near = np.hypot(*(verts - corner).T)
+        c = int(np.argmin(near))
+        if near[c] > merge_tolerance:
+            c = len(verts) + len(new_verts)
+            new_verts.append(corner)
+        new_edges += [(va, c), (c, vb)]
+        new_attrs += [attr, int(attrs[at[vb]])]
+        corners.append(float(max(np.hypot(*(corner - verts[va])), np.hypot(*(corner - verts[vb])))))
     where = _listed([f"({verts[loose[a], 0]:.3f}, {verts[loose[a], 1]:.3f})" for a, _ in pairs])
-    names = _describe_sources(sources, pieces.polyline[new_attrs])
+    names = _describe_sources(sources, pieces.polyline[np.array(new_attrs)])
+    how = []
+    if corners:
+        how.append(f"{len(corners)} drawn on to the corner where their lines meet (up to {max(corners):.4g} mm)")
+    if straight:
+        how.append(f"{len(straight)} joined by a straight edge (up to {max(straight):.4g} mm long)")
     warnings.append(
-        f"the border is not closed at {len(pairs)} place(s) ({names}): joined each pair of loose ends with a "
-        f"straight edge, up to {max(gaps):.4g} mm long, at {where} mm (make the pieces of the outline meet where "
-        "you drew them)"
+        f"the border is not closed at {len(pairs)} place(s) ({names}): {'; '.join(how)}, at {where} mm (make the "
+        "pieces of the outline meet where you drew them)"
     )
-    return np.concatenate([edges, new_edges]), np.concatenate([attrs, new_attrs])
+    verts = np.concatenate([verts, np.array(new_verts).reshape(-1, 2)])
+    edges = np.concatenate([edges, np.array(new_edges, dtype=edges.dtype)])
+    return verts, edges, np.concatenate([attrs, np.array(new_attrs, dtype=attrs.dtype)])
+
+
+CORNER_MIN_DEG = 15.0
+"""Border pieces whose ends miss each other meet at a corner (:func:`_corner_of`) when their end pieces turn by at
+least this much; nearer to straight on, the corner is ill-defined and the ends are joined by a straight edge."""
+
+
+def _corner_of(
+    verts: np.ndarray, piece_a: np.ndarray, va: int, piece_b: np.ndarray, vb: int, reach: float
+) -> np.ndarray | None:
+    """Where the border pieces ``piece_a`` (ending at loose end ``va``) and ``piece_b`` (at ``vb``) meet when each is
+    drawn on straight past its end: the crossing of their lines, ahead of both ends and within ``reach`` of each.
+    None when they turn by less than :data:`CORNER_MIN_DEG` or the crossing is not ahead within reach."""
+    pa, pb = verts[va], verts[vb]
+    da = pa - verts[int(piece_a[0] if piece_a[1] == va else piece_a[1])]
+    db = pb - verts[int(piece_b[0] if piece_b[1] == vb else piece_b[1])]
+    la, lb = float(np.hypot(*da)), float(np.hypot(*db))
+    if la == 0.0 or lb == 0.0:
+        return None
+    da, db = da / la, db / lb
+    den = float(da[0] * db[1] - da[1] * db[0])
+    if abs(den) < math.sin(math.radians(CORNER_MIN_DEG)):
+        return None
+    w = pb - pa
+    s = float(w[0] * db[1] - w[1] * db[0]) / den  # pa + s·da = pb + t·db
+    t = float(w[0] * da[1] - w[1] * da[0]) / den
+    slack = 1e-9 * reach  # an end already at the corner (a piece drawn to it, its neighbour short of it)
+    if not (-slack <= s <= reach and -slack <= t <= reach):
+        return None
+    return pa + s * da
 
 
 def _trim_border_stubs(

@@ -374,11 +374,14 @@ def stop_live(ob: bpy.types.Object | None) -> None:
 
 def start(job: Job) -> Job:
     """Register ``job`` as its owner's one job. A running live job on the owner, or showing its work on the same
-    object (:func:`stop_live`), is cancelled (superseded); any other running job there raises
+    object (:func:`stop_live`), is cancelled (superseded); any other running job there, also one started under the
+    object's old name (:func:`job_on`: an export renamed mid-job ran on beside a Bake), raises
     :class:`JobBusyError`."""
     target = job.preview.edited() if job.preview is not None else None
     stop_live(target)
     old = running_job(job.owner)
+    if old is None and target is not None:  # a job started on the object before it was renamed
+        old = job_on(target)
     if old is not None and old is not job:
         if not old.live:
             raise JobBusyError(f"'{job.owner}' is busy ({old.kind}); wait for it or press Esc to cancel it")

@@ -493,6 +493,8 @@ def test_a_frame_stepped_to_while_another_job_runs_is_folded_when_it_ends(folded
     ob.name, scene.name = "Renamed mid-export", "Renamed scene"
     scene.frame_set(8)
     assert timeline.catch_up() and [j.kind for j in jobs._jobs.values() if j.running] == ["exporting"]
+    with pytest.raises(jobs.JobBusyError, match="is busy \\(exporting\\)"):  # one job per object, whatever its name
+        jobs.start(mod(extension, "scene.bake").bake_job(ob, range(1, 10), scene=scene))
     jobs.run_to_end(other)
     assert not timeline.catch_up()
     while timeline.drive_frames():

@@ -226,6 +226,17 @@ def test_border_pieces_that_miss_at_several_corners_by_a_hair_are_joined() -> No
     assert {tuple(np.round(p.vertices[v], 9)) for v in np.unique(diagonal)} >= {(0.0, 0.0), (150.0, 150.0)}
     run = fold_pattern(p, percent=0.5)
     assert run.result.converged and run.report["crease_length_not_folding_pct"] == 0
+    # one side drawn to the corner (0.02 mm off it, within the merge tolerance), the next 0.5 mm short of it: the
+    # corner is that side's end, joined straight (a zero-length edge made it "cross itself" there, refused)
+    sloppy = [
+        CreaseCurve([line((0, 0), (99.5, 0))], "B", None),
+        CreaseCurve([line((100, 0.02), (100, 100))], "B", None),
+        CreaseCurve([line((100, 100), (0.5, 100))], "B", None),
+        CreaseCurve([line((0, 99.5), (0, 0))], "B", None),
+        CreaseCurve([line((0, 0), (100, 100))], "M", 90.0),
+    ]
+    p = discretize(sloppy)
+    assert _one_loop(p) and fold_pattern(p, percent=0.5).result.converged
     # two strokes that miss each other mid-side, running on straight (joined by a straight edge), and at a corner
     halves = [
         CreaseCurve([line((0, 0), (150, 0)), line((150, 0), (150, 150)), line((150, 150), (75.2, 150))], "B", None),

@@ -354,6 +354,8 @@ def test_two_creases_overshooting_a_crossing_along_one_line_keep_their_own_sides
         '<path id="m" d="M50 100 L50 49.7" stroke="#f00"/>'
     )
     p = pattern_of(BORDER + body)
+    [said] = [w for w in p.warnings if "lie on top of each other" in w]
+    assert said.endswith("of equal roles, the stroke that runs on past the piece, else the first drawn)")
     on_line = np.abs(p.vertices[p.edges][:, :, 0] - 50.0).max(axis=1) < 1e-9
     for k in np.flatnonzero(on_line):
         mid = p.vertices[p.edges[k], 1].mean()

@@ -1336,7 +1336,8 @@ def _remove_duplicates(
             warnings.append(
                 f"{int(differ.sum())} segment(s) of creases with different roles lie on top of each other (drawn "
                 f"twice, or within the merge tolerance of each other): {shown}{more}, by role (border > cut > "
-                "mountain/valley > undriven > facet)"
+                "mountain/valley > undriven > facet; of equal roles, the stroke that runs on past the piece, else the "
+                "first drawn)"
             )
         if angle_differ.any():
             x, y = wa[angle_differ][0], da_[angle_differ][0]
@@ -1732,6 +1733,11 @@ def _join_border_gaps(
             continue
         near = np.hypot(*(verts - corner).T)
         c = int(np.argmin(near))
+        if c in (va, vb):  # one end is at the corner, within the merge tolerance: the straight edge is the join
+            new_edges.append((va, vb))
+            new_attrs.append(attr)
+            corners.append(float(d[a, b]))
+            continue
         if near[c] > merge_tolerance:
             c = len(verts) + len(new_verts)
             new_verts.append(corner)

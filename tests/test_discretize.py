@@ -246,6 +246,34 @@ def test_border_pieces_that_miss_at_several_corners_by_a_hair_are_joined() -> No
     assert "): 1 drawn on to the corner where their lines meet (up to 0.2 mm); 1 joined by a straight edge (up " in said
 
 
+def test_an_outline_open_at_one_corner_is_drawn_on_to_the_corner() -> None:
+    """A square whose bottom stops 0.5 mm short of a corner and whose right side starts 0.5 mm above it, with a crease
+    drawn to that corner: the one gap was closed by a straight edge between the ends, a chamfer that left the
+    crease's end outside the sheet (cut back, 0.35 mm from the corner). Both ends are drawn on to the corner now; a
+    gap whose one end is at the corner already is closed by the straight edge along the side, as before."""
+    sides = [
+        CreaseCurve([line((0, 0), (99.5, 0))], "B", None, source="bottom"),
+        CreaseCurve([line((100, 0.5), (100, 100)), line((100, 100), (0, 100)), line((0, 100), (0, 0))], "B", None),
+        CreaseCurve([line((0, 100), (100, 0))], "M", 90.0, source="diagonal"),
+    ]
+    p = discretize(sides)
+    [said] = [w for w in p.warnings if "not closed" in w]
+    assert "on to the corner where their lines meet, (100.000, 0.000) mm, up to 0.5 mm" in said
+    assert not any("outside the border" in w for w in p.warnings)
+    assert _one_loop(p)
+    diagonal = np.unique(p.edges[p.assignments == "M"])
+    assert (100.0, 0.0) in {tuple(np.round(p.vertices[v], 9)) for v in diagonal}  # the crease reaches the corner
+    mid = [
+        CreaseCurve(
+            [line((0, 0), (60, 0)), line((60, 0), (60, 60)), line((60, 60), (0, 60)), line((0, 60), (0, 0.4))],
+            "B",
+            None,
+        )
+    ]
+    [said] = [w for w in discretize(mid).warnings if "not closed" in w]
+    assert "with a straight edge, 0.4 mm long" in said
+
+
 def test_slits_drawn_in_black_keep_their_bridges_and_an_outline_missing_its_start_closes() -> None:
     """A review session's kirigami sheets: a square outline of four lines meeting at the corners, and black slits
     with 1 mm paper bridges between them. Joining loose ends in pairs before the planar clean-up closed the bridges

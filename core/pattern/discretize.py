@@ -1511,6 +1511,24 @@ def _close_open_border(
     if gap <= merge_tolerance:
         return curves
     names = sorted({curves[ends[i][0]].source or f"curve {ends[i][0]}" for i in loose})
+    corner = _lines_meet(a, _end_direction(curves, ends[loose[0]]), b, _end_direction(curves, ends[loose[1]]), reach)
+    if corner is not None and min(np.hypot(*(corner - a)), np.hypot(*(corner - b))) > merge_tolerance:
+        # a gap at a corner: both ends drawn on to it (a straight edge cut a chamfer off the corner, and a crease
+        # drawn to the corner ended outside the sheet)
+        closing = CreaseCurve(
+            [CurveSegment("line", np.array([a, corner])), CurveSegment("line", np.array([corner, b]))],
+            "B",
+            None,
+            source=f"the corner closing {' and '.join(names)}",
+        )
+        longest = float(max(np.hypot(*(corner - a)), np.hypot(*(corner - b))))
+        warnings.append(
+            f"the border is not closed ({', '.join(names)}): drew its loose ends at ({a[0]:.3f}, {a[1]:.3f}) and "
+            f"({b[0]:.3f}, {b[1]:.3f}) mm on to the corner where their lines meet, ({corner[0]:.3f}, "
+            f"{corner[1]:.3f}) mm, up to {longest:.4g} mm (close the outline where you drew it, e.g. Cyclic in "
+            "Blender, Z in SVG)"
+        )
+        return [*curves, closing]
     closing = CreaseCurve(
         [CurveSegment("line", np.array([a, b]))], "B", None, source=f"the straight edge closing {' and '.join(names)}"
     )
@@ -1520,6 +1538,15 @@ def _close_open_border(
         "e.g. Cyclic in Blender, Z in SVG)"
     )
     return [*curves, closing]
+
+
+def _end_direction(curves: list[CreaseCurve], end: tuple[int, int, np.ndarray]) -> np.ndarray:
+    """The direction a border stroke runs in at its loose ``end`` (stroke, side, point), outwards: along the chord of
+    its last 1/1000 (a curve's tangent there)."""
+    k, side, point = end
+    seg = curves[k].segments[0 if side == 0 else -1]
+    inner = seg.evaluate(np.array([1e-3 if side == 0 else 1.0 - 1e-3]))[0]
+    return np.asarray(point, dtype=np.float64) - inner
 
 
 def _either_overshoots(
@@ -1774,6 +1801,12 @@ def _corner_of(
     pa, pb = verts[va], verts[vb]
     da = pa - verts[int(piece_a[0] if piece_a[1] == va else piece_a[1])]
     db = pb - verts[int(piece_b[0] if piece_b[1] == vb else piece_b[1])]
+    return _lines_meet(pa, da, pb, db, reach)
+
+
+def _lines_meet(pa: np.ndarray, da: np.ndarray, pb: np.ndarray, db: np.ndarray, reach: float) -> np.ndarray | None:
+    """Where the rays from ``pa`` along ``da`` and from ``pb`` along ``db`` meet, each within ``reach`` of its start
+    (a start already there counts); None when they turn by less than :data:`CORNER_MIN_DEG`."""
     la, lb = float(np.hypot(*da)), float(np.hypot(*db))
     if la == 0.0 or lb == 0.0:
         return None

@@ -1750,20 +1750,12 @@ def _join_border_gaps(
         va, vb = int(loose[a]), int(loose[b])
         attr = int(attrs[at[va]])
         corner = _corner_of(verts, edges[at[va]], va, edges[at[vb]], vb, reach)
-        on_end = corner is not None and min(np.hypot(*(corner - verts[va])), np.hypot(*(corner - verts[vb]))) <= (
-            1e-9 * reach
-        )
-        if corner is None or on_end:  # no corner, or one piece already ends at it: the straight edge is the join
+        near = np.hypot(*(verts - corner).T) if corner is not None else None
+        c = int(np.argmin(near)) if near is not None else -1
+        if c < 0 or c in (va, vb):  # no corner, or one end already at it (within the merge tolerance): a straight join
             new_edges.append((va, vb))
             new_attrs.append(attr)
-            (corners if on_end else straight).append(float(d[a, b]))
-            continue
-        near = np.hypot(*(verts - corner).T)
-        c = int(np.argmin(near))
-        if c in (va, vb):  # one end is at the corner, within the merge tolerance: the straight edge is the join
-            new_edges.append((va, vb))
-            new_attrs.append(attr)
-            corners.append(float(d[a, b]))
+            (straight if c < 0 else corners).append(float(d[a, b]))
             continue
         if near[c] > merge_tolerance:
             c = len(verts) + len(new_verts)

@@ -237,6 +237,19 @@ def test_border_pieces_that_miss_at_several_corners_by_a_hair_are_joined() -> No
     ]
     p = discretize(sloppy)
     assert _one_loop(p) and fold_pattern(p, percent=0.5).result.converged
+    # a crease drawn 3 mm past a corner the outline misses: split where it crosses the joined corner and trimmed
+    # there (it crossed the join with no vertex on it, and the triangulation refused "edges … cross or touch")
+    past = [
+        CreaseCurve([line((0, 0), (99.5, 0))], "B", None),
+        CreaseCurve([line((100, 0.5), (100, 100))], "B", None),
+        CreaseCurve([line((100, 100), (0, 100))], "B", None),
+        CreaseCurve([line((0, 99.5), (0, 0.5))], "B", None),
+        CreaseCurve([line((0, 100), (103, -3))], "M", 90.0),
+    ]
+    p = discretize(past)
+    assert any(w.startswith("removed 1 crease segment(s) outside the border") for w in p.warnings), p.warnings
+    creased = {tuple(np.round(p.vertices[v], 9)) for v in np.unique(p.edges[p.assignments == "M"])}
+    assert (100.0, 0.0) in creased and _one_loop(p) and fold_pattern(p, percent=0.5).result.converged
     # two strokes that miss each other mid-side, running on straight (joined by a straight edge), and at a corner
     halves = [
         CreaseCurve([line((0, 0), (150, 0)), line((150, 0), (150, 150)), line((150, 150), (75.2, 150))], "B", None),

@@ -15,7 +15,7 @@ from ..core.pattern.model import PatternError
 from .outputs import check_outputs, finite_json, stdout_to_devnull
 from .progress import Progress
 
-OUTPUT_SUFFIXES = (".fold", ".obj", ".stl", ".glb", ".blend", ".svg")
+OUTPUT_SUFFIXES = (".fold", ".obj", ".stl", ".glb", ".gltf", ".blend", ".svg")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--out",
         required=True,
-        help="output: .fold, .obj, .stl, .glb or .blend (the folded mesh), or .svg (its flat crease pattern, as "
+        help="output: .fold, .obj, .stl, .glb, .gltf or .blend (the folded mesh), or .svg (its flat crease pattern, as "
         "Export SVG writes it)",
     )
     p.add_argument(

@@ -17,6 +17,12 @@ from .job_modal import JobOperator
 
 FORMATS = (
     ("GLB", "glTF Binary (.glb)", "Folded mesh; with a bake, morph targets and the fold animation", ".glb"),
+    (
+        "GLTF",
+        "glTF Embedded (.gltf)",
+        "The same as glTF Binary, as one JSON text file with its data embedded (for web viewers and text tools)",
+        ".gltf",
+    ),
     ("OBJ", "Wavefront (.obj)", "Folded mesh at the current frame, with modifiers and flat-pattern UVs", ".obj"),
     ("STL", "STL (.stl)", "Folded mesh at the current frame with modifiers (Solidify), millimetres by default", ".stl"),
     ("FOLD", "FOLD (.fold)", "Crease pattern plus one folded FOLD frame per baked frame (simulated angles)", ".fold"),
@@ -48,7 +54,7 @@ class CURVED_FOLD_OT_export_folded(JobOperator, bpy.types.Operator, ExportHelper
     own_errors = (OSError, ImportError)
 
     filename_ext = ".glb"
-    filter_glob: StringProperty(default="*.glb;*.obj;*.stl;*.fold;*.blend", options={"HIDDEN"})
+    filter_glob: StringProperty(default="*.glb;*.gltf;*.obj;*.stl;*.fold;*.blend", options={"HIDDEN"})
     file_format: EnumProperty(
         name="Format", description="File format to write", items=[f[:3] for f in FORMATS], default="GLB"
     )

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import tempfile
 from collections.abc import Generator, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,6 +25,7 @@ import numpy as np
 
 from ..core import run_to_end
 from ..core.io.atomic import atomic_output, atomic_write_text
+from ..core.io.gltf import GltfError, check_embedded_gltf, embedded_gltf
 from ..core.io.svg import SAMPLED_ATTRIBUTE, SAMPLED_VALUE
 from ..core.mesh.fold_mesh import FoldMesh
 from .jobs import Job, ObjectHandle, Progress
@@ -477,8 +479,8 @@ def check_complete(path: Path, suffix: str, n_vertices: int) -> None:
 
     Blender's C++ OBJ writer ignores write errors (a full disk left an OBJ cut mid-line and the operator said
     "File exported successfully"), so the file is checked before it replaces anything: an OBJ must end with a
-    newline and hold ``n_vertices`` ``v`` lines; a GLB's header length must equal the file size; a .blend file
-    must end with its ``ENDB`` block.
+    newline and hold ``n_vertices`` ``v`` lines; a GLB's header length must equal the file size; a .gltf must be
+    whole JSON whose embedded buffers hold the bytes they say; a .blend file must end with its ``ENDB`` block.
     """
     suffix = suffix.lower()
     size = path.stat().st_size
@@ -507,6 +509,11 @@ def check_complete(path: Path, suffix: str, n_vertices: int) -> None:
                     f"the STL file is incomplete ({size} bytes written, its header counts "
                     f"{int.from_bytes(head[80:84], 'little')} triangles: {expected} bytes)"
                 )
+    elif suffix == ".gltf":
+        try:
+            check_embedded_gltf(path.read_text(encoding="utf-8"))
+        except (GltfError, UnicodeDecodeError) as exc:
+            raise OSError(f"the glTF file is incomplete: {exc}") from None
     elif suffix == ".blend":
         with open(path, "rb") as fh:
             fh.seek(max(size - 64, 0))
@@ -561,20 +568,18 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
             apply_modifiers=True,
             global_scale=scale,
         )
-    elif suffix in (".glb", ".gltf"):
-        result = bpy.ops.export_scene.gltf(
-            filepath=str(path),
-            export_format="GLB" if suffix == ".glb" else "GLTF_SEPARATE",
-            use_selection=True,
-            use_active_scene=True,  # otherwise every scene (the user's too) is written
-            export_morph=animated,
-            export_morph_normal=animated,
-            export_animations=animated,
-            export_apply=not animated,  # animated: modifiers were already baked into the shape keys
-            export_texcoords=True,
-            export_normals=True,
-            export_materials="EXPORT",
-        )
+    elif suffix == ".gltf":  # one self-contained file: the GLB with its binary chunk embedded (core.io.gltf)
+        with tempfile.TemporaryDirectory(prefix="curved-fold-gltf-") as folder:
+            glb = Path(folder) / "export.glb"
+            _export_glb(glb, animated)
+            try:
+                text = embedded_gltf(glb.read_bytes() if glb.exists() else b"")
+            except GltfError as exc:
+                raise OSError(f"Blender's glTF exporter did not write a whole file: {exc}") from None
+        path.write_text(text, encoding="utf-8")
+        return
+    elif suffix == ".glb":
+        result = _export_glb(path, animated)
     else:  # .blend
         # with its scene, so the file opens showing the object and the baked frame range (an object alone opened
         # to an empty scene, "Library file, loading empty scene", reachable only through Append)
@@ -582,6 +587,23 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
         result = {"FINISHED"}
     if "FINISHED" not in result or not path.exists():
         raise OSError(f"{path}: Blender's {suffix} exporter did not write the file ({result})")
+
+
+def _export_glb(path: Path, animated: bool) -> set[str]:
+    """Blender's glTF exporter writing the selected object of the active (temporary) scene to ``path`` as GLB."""
+    return bpy.ops.export_scene.gltf(
+        filepath=str(path),
+        export_format="GLB",
+        use_selection=True,
+        use_active_scene=True,  # otherwise every scene (the user's too) is written
+        export_morph=animated,
+        export_morph_normal=animated,
+        export_animations=animated,
+        export_apply=not animated,  # animated: modifiers were already baked into the shape keys
+        export_texcoords=True,
+        export_normals=True,
+        export_materials="EXPORT",
+    )
 
 
 SVG_LAYOUTS = ("origami-simulator", "cutter")

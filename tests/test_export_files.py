@@ -4,6 +4,7 @@ installed. Real bpy, a real fold of a vendored pattern."""
 
 from __future__ import annotations
 
+import base64
 import json
 import math
 import os
@@ -355,12 +356,13 @@ validator.validateBytes(new Uint8Array(fs.readFileSync(file)))
 """
 
 
-def test_khronos_gltf_validator_accepts_our_glb(empty_scene, wavy, tmp_path):
+@pytest.mark.parametrize("suffix", [".glb", ".gltf"])
+def test_khronos_gltf_validator_accepts_our_glb(empty_scene, wavy, tmp_path, suffix):
     cmd = _validator()
     if cmd is None:
         pytest.skip("node or the npm package gltf-validator is not installed (tools/setup.sh installs both)")
     mesh, frames = wavy
-    path = export.export_folded_file(tmp_path / "w.glb", mesh, frames)
+    path = export.export_folded_file(tmp_path / f"w{suffix}", mesh, frames)
     proc = subprocess.run([*cmd, str(path)], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     issues = json.loads(proc.stdout)
@@ -368,7 +370,31 @@ def test_khronos_gltf_validator_accepts_our_glb(empty_scene, wavy, tmp_path):
     assert issues["numWarnings"] == 0, issues["messages"][:5]
 
 
-@pytest.mark.parametrize("suffix", [".glb", ".obj", ".stl", ".blend"])
+def test_gltf_is_the_glb_in_one_text_file_and_reads_back_with_its_animation(empty_scene, wavy, tmp_path):
+    """``.gltf`` was refused on the command line and not offered by Export Mesh (Blender writes it as a .gltf and a
+    .bin, two files no write can replace all or nothing). It is now the GLB's JSON with its binary chunk embedded as a
+    data URI: one file, the same accessors and bytes, and Blender's importer reads back the mesh and one shape key
+    per frame."""
+    from curved_fold.core.io.gltf import DATA_URI
+
+    mesh, frames = wavy
+    glb = export.export_folded_file(tmp_path / "w.glb", mesh, frames)
+    gltf = export.export_folded_file(tmp_path / "w.gltf", mesh, frames)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["w.glb", "w.gltf"]  # no .bin beside it
+    doc, blob = read_glb(glb)
+    text = json.loads(gltf.read_text(encoding="utf-8"))
+    uri = text["buffers"][0].pop("uri")
+    assert uri.startswith(DATA_URI)
+    assert base64.b64decode(uri[len(DATA_URI) :]) == blob[: doc["buffers"][0]["byteLength"]]
+    assert text == doc
+    bpy.ops.wm.read_homefile(use_empty=True)
+    bpy.ops.import_scene.gltf(filepath=str(gltf))
+    (ob,) = [o for o in bpy.context.scene.objects if o.type == "MESH"]
+    assert len(ob.data.polygons) == len(mesh.triangles)
+    assert len(ob.data.shape_keys.key_blocks) == 1 + len(frames)
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf", ".obj", ".stl", ".blend"])
 def test_blender_exporter_failing_midway_keeps_the_old_file(empty_scene, wavy, tmp_path, monkeypatch, suffix):
     """Every Blender exporter writes to a temporary file that replaces the target only when whole (the Export
     operator and the command line both go through ``export_folded_file``): a writer that dies half-way, or one that

@@ -334,18 +334,21 @@ def test_export_operators_write_files_blender_reimports(folded, tmp_path):
     scene.frame_start, scene.frame_end = 1, 3
     assert bpy.ops.curved_fold.bake() == {"FINISHED"}
     before = snapshot()
-    for fmt, suffix in (("GLB", ".glb"), ("OBJ", ".obj"), ("STL", ".stl"), ("FOLD", ".fold")):
+    for fmt, suffix in (("GLB", ".glb"), ("GLTF", ".gltf"), ("OBJ", ".obj"), ("STL", ".stl"), ("FOLD", ".fold")):
         path = tmp_path / f"out{suffix}"
         assert bpy.ops.curved_fold.export_folded(filepath=str(path), file_format=fmt) == {"FINISHED"}, fmt
         assert path.stat().st_size > 0
     assert bpy.ops.curved_fold.export_pattern_svg(filepath=str(tmp_path / "cp.svg")) == {"FINISHED"}
     assert snapshot() == before  # exports never touch the scene
-    bpy.ops.import_scene.gltf(filepath=str(tmp_path / "out.glb"))
-    glb = [o for o in bpy.data.objects if o.name not in before and o.type == "MESH"]
-    assert len(glb) == 1 and len(glb[0].data.shape_keys.key_blocks) == 4
+    for suffix in (".glb", ".gltf"):  # the .gltf is one file: the same mesh and animation embedded
+        known = {o.name for o in bpy.data.objects}
+        bpy.ops.import_scene.gltf(filepath=str(tmp_path / f"out{suffix}"))
+        glb = [o for o in bpy.data.objects if o.name not in known and o.type == "MESH"]
+        assert len(glb) == 1 and len(glb[0].data.shape_keys.key_blocks) == 4, suffix
+    assert not list(tmp_path.glob("*.bin"))
     bpy.ops.wm.obj_import(filepath=str(tmp_path / "out.obj"))
     bpy.ops.wm.stl_import(filepath=str(tmp_path / "out.stl"))
-    assert len([o for o in bpy.data.objects if o.type == "MESH"]) == 4
+    assert len([o for o in bpy.data.objects if o.type == "MESH"]) == 5
     import json
 
     doc = json.loads((tmp_path / "out.fold").read_text())  # key frame = crease pattern, a FOLD frame per baked frame
@@ -359,10 +362,10 @@ def test_export_takes_the_format_from_the_file_name_typed(folded, extension, tmp
     ``export_pattern_svg(filepath="cp")`` wrote a file without an extension (a designer session's script). A name's
     extension now chooses the format, a format given still wins, and the SVG gets its extension. In the file
     browser a typed extension switches the Format menu and a change of the menu renames the file (``check``)."""
-    for suffix in (".stl", ".obj", ".fold", ".glb"):
+    for suffix in (".stl", ".obj", ".fold", ".glb", ".gltf"):
         assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / f"m1{suffix}")) == {"FINISHED"}
         assert (tmp_path / f"m1{suffix}").is_file(), suffix
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["m1.fold", "m1.glb", "m1.obj", "m1.stl"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m1.fold", "m1.glb", "m1.gltf", "m1.obj", "m1.stl"]
     capfd.readouterr()
     assert bpy.ops.curved_fold.export_folded(filepath=str(tmp_path / "m2.stl"), file_format="OBJ") == {"FINISHED"}
     assert (tmp_path / "m2.obj").is_file() and not (tmp_path / "m2.stl").exists()

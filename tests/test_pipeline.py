@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "origami-simulator"
 
@@ -191,6 +192,18 @@ def test_cli_finds_an_unwritable_output_folder_before_folding(capsys, monkeypatc
     monkeypatch.setattr(pipeline, "fold_pattern", no_fold)
     assert main(["fold", str(FIXTURES / "CircularPleat-antiFacet.svg"), "--out", "/sys/cp.glb"]) == 2
     assert "curved_fold: error: --out /sys/cp.glb: cannot write in /sys" in capsys.readouterr().err
+
+
+def test_cli_writes_gltf_as_one_file(tmp_path, capsys):
+    """``--out x.gltf`` was refused ("unknown output type '.gltf'"): it is the .glb's content in one text file."""
+    pytest.importorskip("bpy")
+    from curved_fold.cli import main
+
+    out = tmp_path / "x.gltf"
+    assert main(["fold", str(FIXTURES / "simpleVertex.svg"), "--out", str(out)]) == 0, capsys.readouterr().err
+    doc = json.loads(out.read_text(encoding="utf-8"))
+    assert doc["asset"]["version"] == "2.0" and doc["buffers"][0]["uri"].startswith("data:")
+    assert [p.name for p in tmp_path.iterdir()] == ["x.gltf"]
 
 
 def test_cli_rejects_unknown_output_suffix(tmp_path, capsys):

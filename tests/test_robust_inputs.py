@@ -306,6 +306,29 @@ def test_two_creases_drawn_to_one_border_point_and_stopping_short_meet_there() -
     assert moved.startswith("6 crease end(s) stopped short of the border") and " and 2 more), from " in moved
 
 
+def test_a_crease_drawn_towards_a_corner_and_stopping_short_lands_on_the_corner() -> None:
+    """A crease drawn by eye towards a corner of the sheet and stopping 0.3 mm short was moved to the nearest point
+    of a side, 0.2–0.3 mm from the corner: a border piece of that length beside the corner, and a sliver triangle
+    in it (a reviewer's gapped corner, and as much a closed one). An end whose nearest corner is within twice its
+    distance from the border now lands on the corner; one drawn to a side 1 mm from a corner still lands on the
+    side."""
+    body = (
+        '<path id="diag" d="M50 50 L99.79 99.79" stroke="#f00"/>'  # towards (100, 100), 0.3 mm short
+        '<path id="low" d="M30 74.52 L99.718 99.897" stroke="#00f"/>'  # towards (100, 100) at 20°, 0.3 mm short
+        '<path id="steep" d="M10 40 L0.1 99.7" stroke="#00f"/>'  # towards (0, 100), 0.3 mm short
+        '<path id="side" d="M95 20 L99 0.2" stroke="#f00"/>'  # to the top side 1 mm from the corner
+    )
+    for outline in (BORDER, '<path d="M0 0 L100 0 L100 99.7 M99.8 100 L0 100 L0 0" stroke="#000000" fill="none"/>'):
+        p = pattern_of(outline + body)
+        ends = {tuple(np.round(v, 6)) for v in p.vertices[np.unique(p.edges[p.assignments != "B"])]}
+        assert (100.0, -100.0) in ends and (0.0, -100.0) in ends
+        assert (99.0, 0.0) in ends  # drawn to the side: stays on it
+        if outline == BORDER:  # (the gapped outline keeps the pieces its join drew on to the corner)
+            border = p.vertices[p.edges[p.assignments == "B"]]
+            assert np.hypot(*(border[:, 1] - border[:, 0]).T).min() > 0.9  # the side crease 1 mm off; none shorter
+        assert_folds_finite(p, angle=90)
+
+
 def test_creases_drawn_onto_a_curved_hole_are_not_said_to_stop_short() -> None:
     """A designer's radial creases drawn exactly onto a round hole (150 mm sheet, r = 10) end on the circle, up to
     the tolerance off its chords: at a 5 mm interval they were moved onto the chord with a warning to "draw creases

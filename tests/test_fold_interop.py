@@ -203,7 +203,7 @@ def test_another_tools_dense_polylines_are_thinned_as_a_drawings(tmp_path: Path)
     on a 150 × 100 mm sheet (a designer session's CAD-style file, fifteenth pass). Kept point for point, the
     triangulation fanned 20 mm triangles onto their 0.5 mm pieces: 1,264 faces, 495 corners under 1°. Thinned as
     the same polylines drawn in an SVG are, it meshes as that drawing does; the file's edges still name the
-    creases."""
+    creases (a curve's, as one stroke)."""
     from curved_fold.core.mesh.build import build_mesh
     from curved_fold.core.mesh.fold_mesh import corner_angles
 
@@ -247,7 +247,7 @@ def test_another_tools_dense_polylines_are_thinned_as_a_drawings(tmp_path: Path)
     assert fold.n_faces == drawn.n_faces < 300
     creases = read_pattern(path)
     named = {creases.sources[k] for k in creases.edge_polyline[creases.assignments == "M"]}
-    assert named and all(name.startswith("cad.fold edge ") for name in named)
+    assert named and all(name.startswith("cad.fold edges ") for name in named)  # one stroke per curve
 
 
 def _dense_fold(tmp_path: Path, name: str, extra: list[tuple[list[list[float]], str]], size: float = 100.0) -> Path:
@@ -462,3 +462,66 @@ def test_a_folded_key_frame_reads_its_crease_pattern_from_a_flat_frame() -> None
     assert len(parsed.frames) == 1 and np.allclose(parsed.frames[0], folded)
     pattern = pattern_for_folding(parsed)
     assert np.count_nonzero(pattern.assignments == "V") == 1
+
+
+def _plain_fold(pattern, path: Path) -> Path:
+    """``pattern`` as another tool writes it: segments only, no ``curved_fold:`` fields."""
+    doc = {
+        "file_spec": 1.1,
+        "frame_unit": "mm",
+        "vertices_coords": pattern.vertices.tolist(),
+        "edges_vertices": pattern.edges.tolist(),
+        "edges_assignment": pattern.assignments.tolist(),
+        "edges_foldAngle": [float(a) if np.isfinite(a) else None for a in pattern.fold_angles],
+    }
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_a_plain_fold_files_creases_are_judged_and_named_as_the_strokes_they_draw(tmp_path):
+    """Another tool's FOLD file made every edge a crease of its own: the verdict's rule (a crease more than half of
+    whose length stays flat or folds the wrong way) was applied per 3–8 mm edge, so the same fold of the same mesh
+    was flagged from the FOLD file and not from its SVG twin (a designer's curved hypar: "37 crease(s), 8 %" against
+    one crease, 2.8 %; a bent degree-4 vertex at 60 %: flagged against clean), and creases were named by edge.
+    Its segments are now chained into strokes (through vertices where two of one role and angle meet, turning by
+    30° or less): ``cannot_fold``'s arc is one crease from either file, named by its file edges."""
+    svg = REPO / "examples" / "cannot_fold.svg"
+    fold = _plain_fold(read_pattern(svg), tmp_path / "cf.fold")
+    reports = [fold_pattern(read_pattern(f), percent=1.0).report for f in (svg, fold)]
+    for r in reports:
+        assert r["does_not_fold_as_assigned"] and len(r["creases_not_folding"]) == 1
+    assert reports[1]["crease_length_not_folding_pct"] == pytest.approx(reports[0]["crease_length_not_folding_pct"])
+    name = reports[1]["creases_not_folding"][0]["crease"]
+    assert name.startswith("cf.fold edges ") and name.endswith(" in one stroke)"), name
+
+
+def test_drawn_strokes_chain_curves_and_straight_creases_through_crossings_not_corners():
+    """A polyline arc (M) crossed by a straight valley drawn as two edges, and a mountain zigzag with a 90° corner:
+    the arc is one stroke, the valley one, the zigzag two (a corner is where a drawn stroke ends, as in
+    ``flattened_curves``)."""
+    from curved_fold.core.pattern.model import CreasePattern
+    from curved_fold.core.pattern.polylines import drawn_strokes
+
+    t = np.linspace(0.0, np.pi, 9)
+    arc = np.c_[50 + 30 * np.cos(t), 20 + 30 * np.sin(t)]  # vertex 4 is (50, 50): the valley crosses there
+    verts = np.r_[arc, [[50.0, 90.0], [50.0, 10.0], [10.0, 80.0], [30.0, 80.0], [30.0, 60.0]]]
+    edges = [[k, k + 1] for k in range(8)] + [[4, 9], [4, 10], [11, 12], [12, 13]]
+    roles = ["M"] * 8 + ["V", "V", "M", "M"]
+    angles = [-90.0] * 8 + [90.0, 90.0, -90.0, -90.0]
+    m = len(edges)
+    pattern = CreasePattern(
+        vertices=verts,
+        edges=np.array(edges),
+        assignments=np.array(roles),
+        fold_angles=np.array(angles),
+        edge_polyline=np.arange(m),
+        edge_from_curve=np.zeros(m, dtype=bool),
+        sources=[f"t.fold edge {k}" for k in range(m)],
+    )
+    strokes = drawn_strokes(pattern)
+    poly = strokes.edge_polyline
+    assert len(set(poly[:8].tolist())) == 1 and poly[8] == poly[9] and poly[10] != poly[11]
+    assert len(set(poly.tolist())) == 4
+    assert strokes.sources[poly[0]] == "t.fold edges 0, 1, … (8 in one stroke)"
+    assert strokes.sources[poly[8]] == "t.fold edges 8, 9"
+    assert strokes.sources[poly[10]] == "t.fold edge 10"

@@ -32,6 +32,7 @@ from .. import run_to_end
 from ..mesh.fold_mesh import FoldMesh, corner_angles, polygon_sides
 from ..pattern.discretize import segments_at_interval, with_crossings_split
 from ..pattern.model import ASSIGNMENTS, CreasePattern, PatternError
+from ..pattern.polylines import drawn_strokes
 from .atomic import atomic_write_text
 from .fold_validate import load_fold_json
 
@@ -421,7 +422,8 @@ def fold_to_pattern(doc: FoldDocument, source: str | None = None) -> CreasePatte
     """The flat crease pattern of a FOLD document (``source`` names it in ``sources`` and messages).
 
     ``curved_fold:`` fields written by :func:`write_pattern_fold` restore the polyline indices, from-curve flags and
-    source names exactly; plain FOLD files get one polyline per edge named ``"<file> edge i"``. Edges that are not
+    source names exactly; plain FOLD files get one polyline per edge named ``"<file> edge i"`` (grouped into
+    strokes for folding: :func:`another_tools_segments`). Edges that are not
     part of the drawn pattern are dropped: ``J`` (join) edges and, in our folded files, the triangulation diagonals
     (``curved_fold:edge_polyline`` −1). Coincident vertices are merged along slits or refused
     (:func:`_merge_coincident`), so the triangulation never sees them.
@@ -515,10 +517,12 @@ def pattern_for_folding(
 def another_tools_segments(doc: FoldDocument) -> CreasePattern:
     """Another tool's FOLD file as the straight segments it draws, before any sampling: its sliver facets left out
     (:func:`_without_sliver_facets`), its creases without a fold angle folding flat (:func:`_flat_foldable_angles`)
-    and its edges that cross away from a vertex split there (:func:`..pattern.discretize.with_crossings_split`).
+    and its edges that cross away from a vertex split there (:func:`..pattern.discretize.with_crossings_split`),
+    its segments grouped into the strokes they draw (:func:`..pattern.polylines.drawn_strokes`: a crease is judged
+    and named as one, as an SVG's path is).
     What depends on the interval is done by :func:`..pattern.discretize.segments_at_interval`, at fold time in
     Blender (the import keeps these segments), so the Fold panel's Interval applies as ``--interval`` does."""
-    return with_crossings_split(fold_to_pattern(_flat_foldable_angles(_without_sliver_facets(doc))))
+    return drawn_strokes(with_crossings_split(fold_to_pattern(_flat_foldable_angles(_without_sliver_facets(doc)))))
 
 
 def _flat_foldable_angles(doc: FoldDocument) -> FoldDocument:

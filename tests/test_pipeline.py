@@ -82,7 +82,7 @@ def test_cli_fold_writes_obj_through_blender(tmp_path):
 
 def test_cli_names_the_users_file_not_the_temporary_ones(tmp_path, capfd):
     """Blender's OBJ writer prints the file it writes ("Writing to …"); the command line writes through two
-    temporary files (its own and the exporter's atomic one) and passes that output on naming the user's file."""
+    temporary files (its own and the exporter's atomic one) and names the user's file, never a temporary one."""
     from curved_fold.cli import main
 
     examples = Path(__file__).resolve().parents[1] / "examples"
@@ -90,6 +90,31 @@ def test_cli_names_the_users_file_not_the_temporary_ones(tmp_path, capfd):
     assert main(["fold", str(examples / "single_curve.svg"), "--out", str(out)]) == 0
     printed = capfd.readouterr().out
     assert ".tmp" not in printed and str(out) in printed, printed
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".obj", ".stl"])
+def test_cli_prints_its_summary_without_the_exporters_chatter(tmp_path, suffix):
+    """Blender's exporters print progress on the command line's output before its summary: the glTF exporter five
+    lines ("INFO Draco mesh compression is available …", "06:53:11 | INFO: Starting glTF 2.0 export", …), OBJ and
+    STL "Writing to …", "Info: File exported successfully", "Timer 'STL Export' took 0.14 ms". The README shows the
+    summary alone, and that is what is printed now; an exporter's warning or error would still be passed on."""
+    from curved_fold.cli import fold as cli_fold
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    pattern = examples / "single_curve.svg"
+    run = subprocess.run(  # the front door itself: in-process, pytest's capture takes the exporters' prints
+        [sys.executable, "-m", "curved_fold", "fold", str(pattern), "--out", str(tmp_path / f"x{suffix}")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=dict(os.environ),
+    )
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.splitlines()
+    assert lines[0].startswith(f"{pattern}: 136 faces (ruling, "), lines[:3]
+    assert not [ln for ln in lines if "INFO" in ln or "Info:" in ln or "Timer" in ln or "Writing" in ln]
+    said = "Writing to a.obj\nWarning: 3 faces have no UVs\nInfo: File exported successfully\n"
+    assert cli_fold._worth_passing_on(said) == "Warning: 3 faces have no UVs\n"
 
 
 def test_cli_summary_says_no_warp_instead_of_nan(tmp_path, capfd):

@@ -558,17 +558,18 @@ def _projected_step(
     H = assembler.matrix.assemble(work["index"], values)
     stats.hessian_assemblies += 1
     scale = _node_scale(model, x) if RESCUE_SCALED else 1.0
-    for _attempt in range(10):
+    growth = 2.0  # Nielsen's rule: a rejected step multiplies mu by 2, 4, 8, … (2^78 after 12 rejections)
+    for _attempt in range(12):
         shift = mu * force_scale * scale
         try:
             factor = assembler.matrix.factor(H, fx.shift(shift))
         except np.linalg.LinAlgError:
-            mu *= 10.0
+            mu, growth = mu * growth, 2.0 * growth
             continue
         stats.linear_solves += 1
         p = fx.forces(factor.apply(rhs)).reshape(n, 3)
         if not np.all(np.isfinite(p)):
-            mu *= 10.0
+            mu, growth = mu * growth, 2.0 * growth
             continue
         slope = float(np.dot(rhs, p.reshape(-1)))
         curvature = slope - float(np.sum(shift * (p * p).reshape(-1)))  # pᵀH̃p
@@ -579,7 +580,7 @@ def _projected_step(
             slope, curvature = c * slope, c * c * curvature
         predicted = slope - 0.5 * curvature
         if slope <= 0 or predicted <= 0:
-            mu *= 10.0
+            mu, growth = mu * growth, 2.0 * growth
             continue
         trial = x + p
         tev = evaluate(model, trial, ev.theta, percent, jacobians=True)
@@ -589,7 +590,8 @@ def _projected_step(
             mu = max(mu * max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), 1e-9)
             stats.rescue_steps += 1
             return (trial, tev, "projected"), mu
-        mu *= 4.0
+        mu *= growth
+        growth *= 2.0
     return None, mu
 
 

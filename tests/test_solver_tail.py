@@ -316,3 +316,47 @@ def test_repeated_saddle_escapes_follow_the_curve_out(monkeypatch):
     assert abs(curved.energy - straight.energy) <= 1e-8 * straight.energy
     assert curved.saddle_escapes >= 3 and curved.saddle_escapes < straight.saddle_escapes
     assert curved.iterations <= straight.iterations - 8, (curved.iterations, straight.iterations)
+
+
+def test_projected_part_of_element_blocks_is_their_positive_semidefinite_part():
+    """The rescue's projection (``newton._psd_part``) through the complement of the translations equals the full
+    eigendecomposition's positive part for blocks that no translation changes, and is positive semidefinite."""
+    rng = np.random.default_rng(5)
+    for nodes in (3, 4):
+        q = 3 * nodes
+        Q = newton._translation_complement(nodes)
+        reduced = rng.standard_normal((20, q - 3, q - 3))
+        blocks = Q @ (reduced + reduced.transpose(0, 2, 1)) @ Q.T  # symmetric, translations in the null space
+        w, v = np.linalg.eigh(blocks)
+        expected = (v * np.maximum(w, 0.0)[:, None, :]) @ v.transpose(0, 2, 1)
+        projected = blocks.copy()
+        newton._psd_part(projected)
+        np.testing.assert_allclose(projected, expected, atol=1e-12 * np.abs(expected).max())
+        assert np.linalg.eigvalsh(projected).min() > -1e-12 * np.abs(expected).max()
+
+
+@pytest.mark.slow
+def test_the_rescue_leaves_folds_that_converge_within_its_threshold_unchanged_and_folds_a_crumpling_grid(monkeypatch):
+    """The projected-Newton rescue (``newton.RESCUE_AFTER``) only acts past 100 iterations of one solve: a fixture
+    folds bit for bit as without it. The designer's curved Miura (tests/data/sine_rows_crossed.svg) uses it in its
+    last two stages and still folds to a stable minimum (numpy 1.26: 343 iterations instead of 630, another minimum,
+    E 13.815 instead of 13.880)."""
+    from pathlib import Path
+
+    from curved_fold.core.io.reader import read_pattern
+    from curved_fold.core.pipeline import fold_pattern
+
+    data = Path(__file__).resolve().parent
+    runs = {}
+    for rescue in (True, False):
+        monkeypatch.setattr(newton, "RESCUE", rescue)
+        pleat = fold_pattern(read_pattern(data / "fixtures" / "origami-simulator" / "Rotating_Star.svg"), percent=1.0)
+        grid = fold_pattern(read_pattern(data / "data" / "sine_rows_crossed.svg"), percent=1.0)
+        runs[rescue] = pleat, grid
+    (pleat, grid), (plain_pleat, plain_grid) = runs[True], runs[False]
+    assert pleat.report["iterations"] == plain_pleat.report["iterations"]
+    assert np.array_equal(pleat.result.positions, plain_pleat.result.positions)
+    for run in (grid, plain_grid):
+        assert run.report["converged"] and run.report["negative_pivots"] == 0, run.report["message"]
+    assert "projected-Newton rescue steps" in grid.result.message
+    assert "rescue" not in plain_grid.result.message

@@ -125,11 +125,14 @@ def _worth_passing_on(text: str) -> str:
     """The lines of an exporter's output that say something went wrong (a warning or an error). The rest is
     progress chatter that came before the fold's own summary: five lines from the glTF exporter ("INFO Draco mesh
     compression is available …", "06:53:11 | INFO: Starting glTF 2.0 export", …), "Writing to …" and "Info: File
-    exported successfully" from OBJ and STL, "Timer 'STL Export' took 0.14 ms"."""
+    exported successfully" from OBJ and STL, "Timer 'STL Export' took 0.14 ms"; and bpy 5.2's glTF exporter's
+    "ERROR Draco is not available because library could not be found …" (an optional compression library)."""
     import re
 
-    keep = re.compile(r"\b(warning|error|failed)\b", re.IGNORECASE)
-    return "".join(line for line in text.splitlines(keepends=True) if keep.search(line))
+    keep = re.compile(r"warning|error|fail", re.IGNORECASE)  # RuntimeWarning, KeyError, 2 warnings too
+    optional = re.compile(r"(Draco|MeshOptimizer)\b.*\bavailable\b")  # bpy 5.2's glTF: optional libraries
+    lines = text.splitlines(keepends=True)
+    return "".join(line for line in lines if keep.search(line) and not optional.search(line))
 
 
 def _user_paths(text: str, tmp: Path, out: Path) -> str:

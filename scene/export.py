@@ -569,6 +569,7 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
             global_scale=scale,
         )
     elif suffix == ".gltf":  # one self-contained file: the GLB with its binary chunk embedded (core.io.gltf)
+        _without_own_attributes(ob)
         with tempfile.TemporaryDirectory(prefix="curved-fold-gltf-") as folder:
             glb = Path(folder) / "export.glb"
             _export_glb(glb, animated)
@@ -579,6 +580,7 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
         path.write_text(text, encoding="utf-8")
         return
     elif suffix == ".glb":
+        _without_own_attributes(ob)
         result = _export_glb(path, animated)
     else:  # .blend
         # with its scene, so the file opens showing the object and the baked frame range (an object alone opened
@@ -587,6 +589,15 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
         result = {"FINISHED"}
     if "FINISHED" not in result or not path.exists():
         raise OSError(f"{path}: Blender's {suffix} exporter did not write the file ({result})")
+
+
+def _without_own_attributes(ob: bpy.types.Object) -> None:
+    """Remove the add-on's ``cf_*`` attributes from the temporary export copy ``ob``: no exporter writes them, and the
+    NaN fold angles of border edges made bpy 5.2's glTF exporter, which validates every mesh, print "Mesh Folded is
+    not valid, and may be exported wrongly" on every export."""
+    attributes = ob.data.attributes
+    for name in [a.name for a in attributes if a.name.startswith("cf_")]:
+        attributes.remove(attributes[name])
 
 
 def _export_glb(path: Path, animated: bool) -> set[str]:

@@ -113,8 +113,13 @@ def test_cli_prints_its_summary_without_the_exporters_chatter(tmp_path, suffix):
     lines = run.stdout.splitlines()
     assert lines[0].startswith(f"{pattern}: 136 faces (ruling, "), lines[:3]
     assert not [ln for ln in lines if "INFO" in ln or "Info:" in ln or "Timer" in ln or "Writing" in ln]
-    said = "Writing to a.obj\nWarning: 3 faces have no UVs\nInfo: File exported successfully\n"
-    assert cli_fold._worth_passing_on(said) == "Warning: 3 faces have no UVs\n"
+    said = (
+        "Writing to a.obj\nWarning: 3 faces have no UVs\nInfo: File exported successfully\nx.py:3: RuntimeWarning: "
+        "overflow\nKeyError: 'x'\nERROR Draco is not available because library could not be found at /lib/d.so\n"
+    )
+    assert cli_fold._worth_passing_on(said) == (
+        "Warning: 3 faces have no UVs\nx.py:3: RuntimeWarning: overflow\nKeyError: 'x'\n"
+    )
 
 
 def test_cli_summary_says_no_warp_instead_of_nan(tmp_path, capfd):

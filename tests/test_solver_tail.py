@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -360,3 +361,29 @@ def test_the_rescue_leaves_folds_that_converge_within_its_threshold_unchanged_an
         assert run.report["converged"] and run.report["negative_pivots"] == 0, run.report["message"]
     assert "projected-Newton rescue steps" in grid.result.message
     assert "rescue" not in plain_grid.result.message
+
+
+def test_a_rescue_whose_every_try_is_rejected_does_not_poison_the_next(monkeypatch):
+    """When every try of a projected-Newton rescue step is rejected, the damping it returns has grown by 2^78; kept,
+    it made every later rescue of the solve fail too (twelve factorisations each, none accepted). The next try now
+    starts from ten times the damping before, at most ``RESCUE_MU_MAX``, and the 3-row curved Miura still converges
+    with rescue steps taken after the failure."""
+    from curved_fold.core.io.reader import read_pattern
+    from curved_fold.core.pipeline import fold_pattern
+    from curved_fold.core.solve import newton
+
+    real, calls = newton._projected_step, []
+
+    def once_rejected(model, assembler, x, ev, rhs, mu, *rest):
+        calls.append(mu)
+        if len(calls) == 3:
+            return None, mu * 2.0**78
+        step, nxt = real(model, assembler, x, ev, rhs, mu, *rest)
+        calls[-1] = (mu, step is not None)
+        return step, nxt
+
+    monkeypatch.setattr(newton, "_projected_step", once_rejected)
+    run = fold_pattern(read_pattern(Path(__file__).resolve().parent / "data" / "sine_rows_crossed.svg"), percent=1.0)
+    after = calls[3:]
+    assert run.report["converged"] and after
+    assert all(mu <= newton.RESCUE_MU_MAX for mu, _ in after) and any(ok for _, ok in after)

@@ -135,6 +135,11 @@ Treble_Clef 62, at 60 and 100 %), so none is touched."""
 RESCUE_RESIDUAL = 1.0
 """Residual above which a rescued solve (:data:`RESCUE_AFTER`) replaces the Gauss–Newton fallback."""
 
+RESCUE_MU_MAX = 1e6
+"""Largest damping (of the force scale) a rescue starts an iteration with after one whose every try was rejected
+(this iteration falls back to Gauss–Newton); the rejections' own growth (2^78 after twelve) made every later try of
+the solve fail, twelve factorisations each (a reviewer's forced failure: 636 factorisations, none accepted)."""
+
 RESCUE = True
 """Whether the rescue is on at all (off: the solver as before, bit for bit)."""
 
@@ -441,8 +446,10 @@ def newton_steps(
             if step is None and stats.negative_pivots:
                 indefinite_at = (it, residual)
         if step is None and RESCUE and residual > RESCUE_RESIDUAL and (rescue_mu is not None or it >= RESCUE_AFTER):
-            rescue_mu = 1e-3 if rescue_mu is None else rescue_mu
-            step, rescue_mu = _projected_step(model, assembler, x, ev, rhs, rescue_mu, force_scale, percent, stats, fx)
+            before = 1e-3 if rescue_mu is None else rescue_mu
+            step, rescue_mu = _projected_step(model, assembler, x, ev, rhs, before, force_scale, percent, stats, fx)
+            if step is None:  # all rejected: damp the next try more, not by the 2^78 the rejections reached
+                rescue_mu = min(10.0 * before, RESCUE_MU_MAX)
         if step is not None:
             trial, tev, kind = step
             accepted = True

@@ -329,6 +329,18 @@ def test_a_crease_drawn_towards_a_corner_and_stopping_short_lands_on_the_corner(
         assert_folds_finite(p, angle=90)
 
 
+def test_a_crease_is_not_drawn_on_to_a_corner_along_another_crease() -> None:
+    """A mountain diagonal drawn into a corner and a valley that crosses it just before the corner, stopping 0.3 mm
+    short of the side (a reviewer's drawing): drawn on to the corner, the valley's last piece lay on the diagonal's,
+    was dropped as "drawn twice", and the valley ended inside the paper. It lands on the side, as before the corner
+    landing, and nothing is said to lie on top of anything."""
+    body = '<path id="d" d="M0 0 L100 100" stroke="#f00"/><path id="v" d="M50 0 L99.5 99.7" stroke="#00f"/>'
+    p = pattern_of(BORDER + body)
+    assert not [w for w in p.warnings if "on top of each other" in w]
+    valley = p.vertices[np.unique(p.edges[p.assignments == "V"])]
+    assert np.any(np.all(np.abs(valley - (99.5, -100.0)) < 0.05, axis=1)), valley
+
+
 def test_creases_drawn_onto_a_curved_hole_are_not_said_to_stop_short() -> None:
     """A designer's radial creases drawn exactly onto a round hole (150 mm sheet, r = 10) end on the circle, up to
     the tolerance off its chords: at a 5 mm interval they were moved onto the chord with a warning to "draw creases

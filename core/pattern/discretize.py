@@ -2045,7 +2045,10 @@ def _untangled_landing(
     if corner is not None:
         piece, end = corner
         vertex = int(ends[piece, end])
-        if vertex != back_v and not tangles(int(border[piece]), vertex, pts[vertex]):
+        creases = obstacle.copy()
+        creases[border] = False  # a piece along a side of the sheet is the corner's own business
+        clear = vertex != back_v and not _lies_along(pts, all_e[creases], vertex, back_v)
+        if clear and not tangles(int(border[piece]), vertex, pts[vertex]):
             foot[piece], dist[piece] = pts[vertex], near[piece, end]
             return piece
     dest_v, dest = mover.destination(int(border[k]), foot[k])
@@ -2062,6 +2065,27 @@ def _untangled_landing(
             foot[piece], dist[piece] = pts[vertex], near[piece, end]
             return piece
     return None
+
+
+ALONG_DEG = 1.0
+"""A piece drawn on to a corner lies along a stroke already there when their directions from the corner are within
+this angle (:func:`_lies_along`)."""
+
+
+def _lies_along(pts: np.ndarray, edges: np.ndarray, corner: int, back: int) -> bool:
+    """Whether the piece ``back → corner`` (a crease end drawn on to ``corner``) would lie along another crease at
+    the corner: one of ``edges`` leaves the corner within :data:`ALONG_DEG` of the piece's direction.
+    :func:`_join_tangles` sees crossings and vertices passed near, not a piece on top of another that ends at the
+    same two vertices: a valley that crossed a diagonal just before the corner was drawn on to the corner along the
+    diagonal's last piece, and the overlap was then dropped as "drawn twice" (a reviewer's drawing)."""
+    at = np.flatnonzero((edges == corner).any(axis=1))
+    if not len(at):
+        return False
+    other = np.where(edges[at, 0] == corner, edges[at, 1], edges[at, 0])
+    d = pts[other] - pts[corner]
+    u = pts[back] - pts[corner]
+    cos = (d @ u) / np.maximum(np.hypot(*d.T) * float(np.hypot(*u)), 1e-300)
+    return bool(np.any(cos >= math.cos(math.radians(ALONG_DEG))))
 
 
 CORNER_PULL = 2.0

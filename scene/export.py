@@ -569,10 +569,9 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
             global_scale=scale,
         )
     elif suffix == ".gltf":  # one self-contained file: the GLB with its binary chunk embedded (core.io.gltf)
-        _without_own_attributes(ob)
         with tempfile.TemporaryDirectory(prefix="curved-fold-gltf-") as folder:
             glb = Path(folder) / "export.glb"
-            _export_glb(glb, animated)
+            _export_glb(glb, ob, animated)
             try:
                 text = embedded_gltf(glb.read_bytes() if glb.exists() else b"")
             except GltfError as exc:
@@ -580,8 +579,7 @@ def _run_exporter(path: Path, suffix: str, ob: bpy.types.Object, *, animated: bo
         path.write_text(text, encoding="utf-8")
         return
     elif suffix == ".glb":
-        _without_own_attributes(ob)
-        result = _export_glb(path, animated)
+        result = _export_glb(path, ob, animated)
     else:  # .blend
         # with its scene, so the file opens showing the object and the baked frame range (an object alone opened
         # to an empty scene, "Library file, loading empty scene", reachable only through Append)
@@ -600,8 +598,10 @@ def _without_own_attributes(ob: bpy.types.Object) -> None:
         attributes.remove(attributes[name])
 
 
-def _export_glb(path: Path, animated: bool) -> set[str]:
-    """Blender's glTF exporter writing the selected object of the active (temporary) scene to ``path`` as GLB."""
+def _export_glb(path: Path, ob: bpy.types.Object, animated: bool) -> set[str]:
+    """Blender's glTF exporter writing ``ob``, the selected object of the active (temporary) scene, to ``path`` as
+    GLB (without the add-on's attributes)."""
+    _without_own_attributes(ob)
     return bpy.ops.export_scene.gltf(
         filepath=str(path),
         export_format="GLB",

@@ -124,7 +124,7 @@ def _held_back_at_vertices(
     lagging = flat & (along > WRONG_WAY_DEG)
     if not lagging.any():
         return out
-    from ..pattern.polylines import connected_components
+    from ..pattern.polylines import connected_components, ends_in_pairs
     from .measures import interior_vertices
 
     ends = mesh.edges[edge]
@@ -153,12 +153,10 @@ def _held_back_at_vertices(
     hubs = vertex[can_fold & folded[piece].any(axis=1)]
     stuck = vertex[~can_fold]
     # the crease between two junctions: pieces joined where exactly two of one drawn crease meet
-    two = np.flatnonzero(degree[at] == 2)
-    order = np.lexsort((two // 2, at[two]))
-    pair = two[order].reshape(-1, 2) // 2
+    k1, k2, _ = ends_in_pairs(ends, at)
     poly = mesh.edge_polyline[edge]
-    same = poly[pair[:, 0]] == poly[pair[:, 1]]
-    stretch = connected_components(len(edge), pair[same, 0], pair[same, 1])
+    same = poly[k1] == poly[k2]
+    stretch = connected_components(len(edge), k1[same], k2[same])
     at_hub = np.isin(ends, hubs).any(axis=1)
     at_stuck = np.isin(ends, stuck).any(axis=1)
     held = np.setdiff1d(np.unique(stretch[lagging & at_hub]), np.unique(stretch[at_stuck]))

@@ -1012,8 +1012,7 @@ def _listed(texts: list[str], limit: int = 4) -> str:
 
 
 def _describe_sources(sources: list[str], idx: np.ndarray, limit: int = 4) -> str:
-    names = [sources[k] for k in dict.fromkeys(idx.tolist())]
-    return ", ".join(names[:limit]) + (f" and {len(names) - limit} more" if len(names) > limit else "")
+    return _listed([sources[k] for k in dict.fromkeys(idx.tolist())], limit)
 
 
 # ---------------------------------------------------------------------------------------------------- main

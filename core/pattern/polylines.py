@@ -52,6 +52,30 @@ def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
     return np.hypot(*(p - segment_foot(p, a, b)).T)
 
 
+def ends_in_pairs(edges: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pairs of edges that meet two by two: ``codes`` (one per edge end, ``edges.ravel()``'s order) says which
+    ends meet (a vertex, or a vertex and a role), and where exactly two ends share a code their edges ``k1``, ``k2``
+    are a pair, with ``at`` the vertex of those ends; pairs in the order of their codes. The chains of a drawing (its
+    flattened curves, a FOLD file's strokes) and the verdict's stretches of crease are joined at such vertices."""
+    order = np.argsort(codes, kind="stable")
+    c = codes[order]
+    starts = np.flatnonzero(np.r_[True, c[1:] != c[:-1]])
+    pair = starts[np.diff(np.r_[starts, len(c)]) == 2]
+    j1, j2 = order[pair], order[pair + 1]
+    return j1 // 2, j2 // 2, np.asarray(edges).ravel()[j1]
+
+
+def _turn_cosines(
+    v: np.ndarray, e: np.ndarray, k1: np.ndarray, k2: np.ndarray, at: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where edges ``k1`` and ``k2`` meet at vertex ``at``: the cosine of the turn from one to the other, and the
+    product of their lengths (0 for an edge of no length, whose cosine is then 0)."""
+    o1, o2 = e[k1].sum(axis=1) - at, e[k2].sum(axis=1) - at
+    u, w = v[at] - v[o1], v[o2] - v[at]
+    norms = np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)
+    return np.einsum("ij,ij->i", u, w) / np.where(norms > 0, norms, 1.0), norms
+
+
 def _angle_key(fold_angles: np.ndarray) -> np.ndarray:
     """Fold angles as comparable keys: rounded to 1e-9°, a missing angle (``nan``) as ``inf``, so two segments of one
     drawn angle compare equal."""
@@ -119,19 +143,8 @@ def drawn_strokes(pattern: CreasePattern) -> CreasePattern:
         return_inverse=True,
     )
     key = key.reshape(-1)
-    ends = e.ravel()  # end j of edge j // 2
-    group = ends * (int(key.max()) + 1) + key[np.arange(2 * m) // 2]  # (vertex, key)
-    order = np.argsort(group, kind="stable")
-    g = group[order]
-    starts = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
-    sizes = np.diff(np.r_[starts, len(g)])
-    pair = starts[sizes == 2]
-    k1, k2 = order[pair] // 2, order[pair + 1] // 2
-    mid = ends[order[pair]]
-    o1, o2 = e[k1].sum(axis=1) - mid, e[k2].sum(axis=1) - mid
-    u, w = v[mid] - v[o1], v[o2] - v[mid]
-    norms = np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)
-    cos_turn = np.einsum("ij,ij->i", u, w) / np.where(norms > 0, norms, 1.0)
+    k1, k2, mid = ends_in_pairs(e, e.ravel() * (int(key.max()) + 1) + np.repeat(key, 2))  # (vertex, key) per end
+    cos_turn, norms = _turn_cosines(v, e, k1, k2, mid)
     joint = (k1 != k2) & (norms > 0) & (cos_turn >= math.cos(math.radians(MAX_CURVE_TURN_DEG + 1e-3)))
     label = connected_components(m, k1[joint], k2[joint])
     ids, stroke = np.unique(label, return_inverse=True)
@@ -153,7 +166,7 @@ def _stroke_name(sources: list[str], polys: list[int]) -> str:
     named = [sources[k] if 0 <= k < len(sources) else f"edge {k}" for k in polys]
     if len(named) == 1:
         return named[0]
-    head, _, number = named[0].rpartition(" edge ")
+    head = named[0].rpartition(" edge ")[0]
     if not head or not all(s.startswith(head + " edge ") for s in named):
         return f"{named[0]} and {len(named) - 1} more in one stroke"
     listed = ", ".join(s.rpartition(" edge ")[2] for s in named[:2])
@@ -190,16 +203,8 @@ def flattened_curves(
     out = np.zeros(m, dtype=bool)
     if m == 0:
         return out
-    deg = np.bincount(e.ravel(), minlength=n)
-    ends = e.ravel()
-    order = np.argsort(ends, kind="stable")
-    first = np.searchsorted(ends[order], np.arange(n))
-    mid = np.flatnonzero(deg == 2)
-    k1, k2 = order[first[mid]] // 2, order[first[mid] + 1] // 2
-    o1, o2 = e[k1].sum(axis=1) - mid, e[k2].sum(axis=1) - mid
-    u, w = v[mid] - v[o1], v[o2] - v[mid]
-    norms = np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)
-    cos_turn = np.einsum("ij,ij->i", u, w) / np.where(norms > 0, norms, 1.0)
+    k1, k2, mid = ends_in_pairs(e, e.ravel())  # the vertices where exactly two segments meet
+    cos_turn, norms = _turn_cosines(v, e, k1, k2, mid)
     role = np.asarray(assignments)
     angle = _angle_key(fold_angles)
     joint = (
